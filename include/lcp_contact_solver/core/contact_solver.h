@@ -1,0 +1,45 @@
+// The entry point of the core: validates a problem, applies SOFA's parameters (warm start,
+// regularization, minW, maxF), runs the chosen kernel and reports a SolveResult that never
+// holds a non-finite number.
+#pragma once
+
+#include "lcp_contact_solver/core/problem.h"
+#include "lcp_contact_solver/core/solve_result.h"
+#include "lcp_contact_solver/core/solver_params.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace lcp_contact_solver {
+
+class ContactSolver {
+ public:
+  explicit ContactSolver(const SolverParams& params = SolverParams());
+
+  // Returns an empty string on success, otherwise why the parameters were refused (the
+  // previous ones stay in force).
+  std::string setParams(const SolverParams& params);
+  const SolverParams& params() const { return params_; }
+
+  SolveResult solve(const Problem& problem);
+
+  // Forgets the forces remembered for warm starting.
+  void resetWarmStart() { warm_start_.clear(); }
+  std::size_t warmStartSize() const { return warm_start_.size(); }
+
+ private:
+  Eigen::VectorXd initialGuess(const Problem& problem, const std::vector<int>& offsets) const;
+  void rememberForces(const Problem& problem, const std::vector<int>& offsets,
+                      const Eigen::VectorXd& lambda);
+
+  SolverParams params_;
+  std::unordered_map<std::int64_t, std::vector<double>> warm_start_;
+};
+
+// One-off solve without warm start memory.
+SolveResult solveProblem(const Problem& problem, const SolverParams& params);
+
+}  // namespace lcp_contact_solver

@@ -1,0 +1,46 @@
+// The solver kernels. ContactSolver (contact_solver.h) prepares a SolveContext, picks a
+// kernel and turns its report into a SolveResult; kernels only iterate.
+#pragma once
+
+#include "lcp_contact_solver/core/problem.h"
+#include "lcp_contact_solver/core/solve_result.h"
+#include "lcp_contact_solver/core/solver_params.h"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace lcp_contact_solver {
+
+// Everything a kernel needs, computed once per solve.
+struct SolveContext {
+  const Problem* problem = nullptr;
+  const SolverParams* params = nullptr;
+  std::vector<int> offsets;   // first row of each contact, size nc + 1
+  std::vector<double> mu;     // effective μ per contact
+  std::vector<bool> ignored;  // contacts left out (minW, maxF): force stays zero
+  double regularization = 0.0;  // r added to W's diagonal
+
+  // Solver-independent residual of λ (computes d itself).
+  double residual(const Eigen::VectorXd& lambda) const;
+  // d = (W + r I) λ + d_free
+  void computeD(const Eigen::VectorXd& lambda, Eigen::VectorXd& d) const;
+  bool hasFriction() const;  // some active frictional contact with μ > 0
+};
+
+struct KernelReport {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  int iterations = 0;
+  double solver_error = 0.0;  // the kernel's own stopping measure at exit
+  std::string message;        // detail for failures
+  std::vector<double> history;  // residual per iteration when params->displayDebug
+};
+
+// Each kernel starts from `lambda` (the warm start, rows of ignored contacts zero) and
+// leaves its best finite iterate there, whatever the status.
+KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
+KernelReport runNonlinearGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
+KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
+
+}  // namespace lcp_contact_solver

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lcp_contact_solver {
+
+enum class ContactState : std::uint8_t {
+  kOpen = 0,     // no force: separating or just touching
+  kStick = 1,    // force strictly inside the friction cone (bilateral rows: always)
+  kSlip = 2,     // force on the cone boundary (frictionless contacts with force: slip)
+  kIgnored = 3,  // excluded by minW or maxF; force zero
+};
+
+enum class SolveStatus : std::uint8_t {
+  kConverged = 0,         // residual reached the tolerance
+  kMaxIterations,         // iteration or pivot cap reached first; best iterate returned
+  kZeroDiagonal,          // a row has W_ii <= 0 and minW does not exclude it: GS cannot run
+  kNotApplicable,         // this solver cannot treat this problem (e.g. Lemke + friction)
+  kRayTermination,        // Lemke ended on a secondary ray: no solution found
+  kNumericalFailure,      // a pivot or step became non-finite; best finite iterate kept
+  kInvalidInput,          // the problem or parameters failed validation
+};
+
+const char* statusName(SolveStatus status);
+const char* stateName(ContactState state);
+
+struct SolveResult {
+  Eigen::VectorXd forces;  // λ, one entry per row (N, or N·s for impulses)
+  Eigen::VectorXd d;       // W λ + d_free with the W that was solved (regularized)
+  std::vector<ContactState> states;  // one per contact
+  SolveStatus status = SolveStatus::kInvalidInput;
+  bool converged = false;
+  int iterations = 0;         // sweeps (GS) or pivots (Lemke), summed over maxF re-solves
+  int resolves = 0;           // extra solves triggered by maxF
+  double solver_error = 0.0;  // the solver's own stopping measure at exit
+  double residual = 0.0;      // solver-independent residual (residual.h)
+  double solve_time = 0.0;    // wall time of the solve, seconds
+  std::string solver;         // name of the solver that ran
+  std::string message;        // human-readable detail for non-converged statuses
+  std::vector<double> residual_history;  // per sweep/pivot, only with displayDebug
+};
+
+}  // namespace lcp_contact_solver

@@ -1,0 +1,80 @@
+// Solver parameters. Names, meanings and defaults follow SOFA's LCPConstraintSolver
+// (the xml names are given in brackets) so a SOFA scene's settings carry over; where SOFA
+// has a known fault the difference is stated.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace lcp_contact_solver {
+
+enum class SolverKind {
+  kAuto,       // nlgs when some contact has friction (μ > 0), otherwise pgs
+  kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); no friction
+  kNlgs,       // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)
+  kLemke,      // lexicographic Lemke pivoting; exact, for LCPs (no friction)
+};
+
+// How the Gauss-Seidel solvers decide they are done.
+enum class StoppingRule {
+  // Stop when the solver-independent residual (residual.h) is <= tolerance. This is the
+  // figure every result reports, so "converged" means the same for every solver.
+  kResidual,
+  // SOFA's rule: stop when the sweep's summed change, sum_c |W_cc (λ_c^new - λ_c^old)|
+  // (a displacement), is < tolerance. Cheap but absolute and solver-specific.
+  kSofa,
+};
+
+struct SolverParams {
+  // [tolerance] Convergence threshold. With kResidual: the normalised natural-map
+  // residual (dimensionless). With kSofa: the per-sweep summed displacement change, in
+  // the units of d (m or m/s).
+  double tolerance = 1e-3;
+  // [maxIt] Maximum Gauss-Seidel sweeps; for Lemke, the pivot cap.
+  int maxIt = 1000;
+  // [mu] Friction coefficient for contacts that give none (Contact::mu < 0). Unlike SOFA
+  // this is only a default: every contact may carry its own μ.
+  double mu = 0.6;
+  // [initial_guess] Warm start: start each contact from the force it had, by contact id,
+  // in the previous solve of the same ContactSolver. New ids start from zero.
+  bool initial_guess = true;
+  // [build_lcp] true: solve on the assembled W (dense or block-sparse). false: the unbuilt
+  // solve, which needs the body form of the compliance; with an assembled W the built
+  // solve is used and the result says so in its message.
+  bool build_lcp = true;
+  // [regularizationTerm] r >= 0 added to W's diagonal (W + r I) during the solve, in the
+  // units of W (m/N). Makes forces unique on rank-deficient W at the cost of r·λ error.
+  double regularizationTerm = 0.0;
+  // [minW] If > 0, contacts whose normal self-compliance W_nn (after regularization) is
+  // <= minW get no force and state "ignored". SOFA compares with "smaller than"; a zero
+  // or negative diagonal with minW = 0 is reported as a failure instead of dividing by it.
+  double minW = 0.0;
+  // [maxF] If > 0, a contact whose force norm exceeds maxF (N) is dropped (state
+  // "ignored") and the remaining contacts are solved again, until no force exceeds it.
+  // SOFA drops the force without re-solving, leaving the others inconsistent.
+  double maxF = 0.0;
+  // [computeConstraintForces] Keep and publish the forces (ROS layer). The core always
+  // returns them; the node skips storing/publishing when false and nobody subscribes.
+  bool computeConstraintForces = false;
+  // [displayDebug] Record the residual after every sweep/pivot in the result and, in the
+  // node, log per-cycle debug lines.
+  bool displayDebug = false;
+
+  SolverKind solver = SolverKind::kAuto;
+  StoppingRule stopping_rule = StoppingRule::kResidual;
+  // Refuse problems with more rows than this (0 = no limit); protects against
+  // allocation failures from hostile input.
+  int max_rows = 0;
+};
+
+const char* solverName(SolverKind kind);
+// Parses "auto", "pgs", "nlgs", "lemke"; returns false for an unknown name.
+bool parseSolverName(const std::string& name, SolverKind* kind);
+std::vector<std::string> solverNames();
+const char* stoppingRuleName(StoppingRule rule);
+bool parseStoppingRule(const std::string& name, StoppingRule* rule);
+
+// Empty string if the parameters are valid, otherwise a sentence naming the bad field.
+std::string validateParams(const SolverParams& params);
+
+}  // namespace lcp_contact_solver

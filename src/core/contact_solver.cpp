@@ -1,0 +1,231 @@
+#include "lcp_contact_solver/core/contact_solver.h"
+
+#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace lcp_contact_solver {
+
+// ---- SolveContext ---------------------------------------------------------------------------
+
+void SolveContext::computeD(const Eigen::VectorXd& lambda, Eigen::VectorXd& d) const {
+  multiply(problem->W, lambda, d);
+  d += problem->d_free;
+  if (regularization != 0.0) d += regularization * lambda;
+}
+
+double SolveContext::residual(const Eigen::VectorXd& lambda) const {
+  Eigen::VectorXd d;
+  computeD(lambda, d);
+  return naturalMapResidual(*problem, mu, lambda, d, ignored);
+}
+
+bool SolveContext::hasFriction() const {
+  for (std::size_t i = 0; i < problem->contacts.size(); ++i)
+    if (!ignored[i] && problem->contacts[i].type == ContactType::kFrictional && mu[i] > 0.0) return true;
+  return false;
+}
+
+// ---- ContactSolver --------------------------------------------------------------------------
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+SolverKind resolveKind(SolverKind kind, const SolveContext& ctx) {
+  if (kind != SolverKind::kAuto) return kind;
+  return ctx.hasFriction() ? SolverKind::kNlgs : SolverKind::kPgs;
+}
+
+KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  switch (kind) {
+    case SolverKind::kPgs: return runProjectedGaussSeidel(ctx, lambda);
+    case SolverKind::kLemke: return runLemke(ctx, lambda);
+    case SolverKind::kNlgs:
+    case SolverKind::kAuto: break;
+  }
+  return runNonlinearGaussSeidel(ctx, lambda);
+}
+
+// minW: a contact whose normal self-compliance (regularized) is at most minW gets no force.
+std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<int>& offsets,
+                                    double min_w, double regularization) {
+  std::vector<bool> ignored(problem.contacts.size(), false);
+  if (min_w <= 0.0) return ignored;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const double w_nn = diagonalBlock(problem.W, offsets[i], 1)(0, 0) + regularization;
+    ignored[i] = w_nn <= min_w;
+  }
+  return ignored;
+}
+
+// Rows the kernels must leave at zero: ignored contacts, tangents of μ = 0 contacts.
+void zeroInactiveRows(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const Problem& problem = *ctx.problem;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const int off = ctx.offsets[i];
+    const Contact& c = problem.contacts[i];
+    if (ctx.ignored[i]) {
+      lambda.segment(off, c.rows).setZero();
+    } else if (c.type == ContactType::kFrictional && ctx.mu[i] == 0.0) {
+      lambda.segment(off + 1, 2).setZero();
+    }
+  }
+}
+
+// maxF: marks contacts whose force norm exceeds the limit; returns how many.
+int dropContactsAboveMaxF(SolveContext& ctx, const Eigen::VectorXd& lambda, double max_f) {
+  int dropped = 0;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    const double force = lambda.segment(ctx.offsets[i], ctx.problem->contacts[i].rows).norm();
+    if (force > max_f) {
+      ctx.ignored[i] = true;
+      ++dropped;
+    }
+  }
+  return dropped;
+}
+
+bool failedToRun(SolveStatus status) {
+  return status == SolveStatus::kZeroDiagonal || status == SolveStatus::kNotApplicable;
+}
+
+}  // namespace
+
+ContactSolver::ContactSolver(const SolverParams& params) : params_(params) {}
+
+std::string ContactSolver::setParams(const SolverParams& params) {
+  std::string err = validateParams(params);
+  if (err.empty()) params_ = params;
+  return err;
+}
+
+Eigen::VectorXd ContactSolver::initialGuess(const Problem& problem, const std::vector<int>& offsets) const {
+  Eigen::VectorXd lambda = Eigen::VectorXd::Zero(offsets.back());
+  if (!params_.initial_guess) return lambda;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const auto it = warm_start_.find(problem.contacts[i].id);
+    if (it == warm_start_.end() || static_cast<int>(it->second.size()) != problem.contacts[i].rows) continue;
+    for (int k = 0; k < problem.contacts[i].rows; ++k) lambda[offsets[i] + k] = it->second[k];
+  }
+  return lambda;
+}
+
+void ContactSolver::rememberForces(const Problem& problem, const std::vector<int>& offsets,
+                                   const Eigen::VectorXd& lambda) {
+  // Only the contacts of the latest solve are kept: ids that vanished do not pile up.
+  warm_start_.clear();
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const int rows = problem.contacts[i].rows;
+    warm_start_[problem.contacts[i].id].assign(lambda.data() + offsets[i], lambda.data() + offsets[i] + rows);
+  }
+}
+
+SolveResult ContactSolver::solve(const Problem& problem) {
+  const Clock::time_point start = Clock::now();
+  SolveResult result;
+  result.solver = solverName(params_.solver);
+  std::string err = validateParams(params_);
+  if (err.empty()) err = validateProblem(problem, params_.max_rows);
+  if (!err.empty()) {
+    result.status = SolveStatus::kInvalidInput;
+    result.message = err;
+    return result;
+  }
+
+  SolveContext ctx;
+  ctx.problem = &problem;
+  ctx.params = &params_;
+  ctx.offsets = problem.rowOffsets();
+  ctx.mu = effectiveMu(problem, params_.mu);
+  ctx.regularization = params_.regularizationTerm;
+  ctx.ignored = contactsBelowMinW(problem, ctx.offsets, params_.minW, ctx.regularization);
+
+  const SolverKind kind = resolveKind(params_.solver, ctx);
+  result.solver = solverName(kind);
+  Eigen::VectorXd lambda = initialGuess(problem, ctx.offsets);
+  KernelReport report;
+  // maxF: drop the contacts above the limit and solve the rest again, so the remaining
+  // forces are consistent with the contacts that are left. Each pass drops at least one
+  // contact, so this ends.
+  for (;;) {
+    zeroInactiveRows(ctx, lambda);
+    const KernelReport pass = runKernel(kind, ctx, lambda);
+    report.status = pass.status;
+    report.message = pass.message;
+    report.solver_error = pass.solver_error;
+    report.iterations += pass.iterations;
+    report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
+    if (failedToRun(pass.status) || params_.maxF <= 0.0) break;
+    if (dropContactsAboveMaxF(ctx, lambda, params_.maxF) == 0) break;
+    ++result.resolves;
+  }
+  zeroInactiveRows(ctx, lambda);
+
+  if (!lambda.allFinite()) {  // kernels promise finite output; this is the last guard
+    lambda.setZero();
+    report.status = SolveStatus::kNumericalFailure;
+    report.message = "the solver produced a non-finite force; forces reset to zero";
+  }
+  result.forces = lambda;
+  ctx.computeD(lambda, result.d);
+  if (!result.d.allFinite()) {
+    result.d.setZero();
+    result.forces.setZero();
+    report.status = SolveStatus::kNumericalFailure;
+    report.message = "W λ overflowed; forces reset to zero";
+  }
+  result.residual = naturalMapResidual(problem, ctx.mu, result.forces, result.d, ctx.ignored);
+  result.states = classifyContacts(problem, ctx.mu, result.forces, ctx.ignored);
+  result.status = report.status;
+  result.converged = report.status == SolveStatus::kConverged;
+  result.iterations = report.iterations;
+  result.solver_error = std::isfinite(report.solver_error) ? report.solver_error : 0.0;
+  result.message = report.message;
+  result.residual_history = std::move(report.history);
+  if (!params_.build_lcp) {
+    result.message += std::string(result.message.empty() ? "" : "; ") +
+                      "build_lcp=false needs the body form of the compliance; solved on the assembled W";
+  }
+  if (!failedToRun(result.status)) rememberForces(problem, ctx.offsets, result.forces);
+  result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+SolveResult solveProblem(const Problem& problem, const SolverParams& params) {
+  ContactSolver solver(params);
+  SolverParams no_warm_start = params;
+  no_warm_start.initial_guess = false;
+  solver.setParams(no_warm_start);
+  return solver.solve(problem);
+}
+
+// ---- names ----------------------------------------------------------------------------------
+
+const char* statusName(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kConverged: return "converged";
+    case SolveStatus::kMaxIterations: return "max_iterations";
+    case SolveStatus::kZeroDiagonal: return "zero_diagonal";
+    case SolveStatus::kNotApplicable: return "not_applicable";
+    case SolveStatus::kRayTermination: return "ray_termination";
+    case SolveStatus::kNumericalFailure: return "numerical_failure";
+    case SolveStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+const char* stateName(ContactState state) {
+  switch (state) {
+    case ContactState::kOpen: return "open";
+    case ContactState::kStick: return "stick";
+    case ContactState::kSlip: return "slip";
+    case ContactState::kIgnored: return "ignored";
+  }
+  return "unknown";
+}
+
+}  // namespace lcp_contact_solver

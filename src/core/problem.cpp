@@ -1,0 +1,238 @@
+#include "lcp_contact_solver/core/problem.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace lcp_contact_solver {
+
+int rowsForType(ContactType type) {
+  switch (type) {
+    case ContactType::kFrictional: return 3;
+    case ContactType::kFrictionless: return 1;
+    case ContactType::kBilateral: return 1;
+  }
+  return 1;
+}
+
+// ---- BlockSparseMatrix --------------------------------------------------------------------
+
+BlockSparseMatrix BlockSparseMatrix::withBlockSizes(const std::vector<int>& sizes) {
+  BlockSparseMatrix m;
+  m.block_offset.assign(1, 0);
+  for (int s : sizes) m.block_offset.push_back(m.block_offset.back() + s);
+  m.row_start.assign(1, 0);
+  return m;
+}
+
+void BlockSparseMatrix::beginRow() {
+  if (row_start.empty()) row_start.push_back(0);
+  row_start.push_back(static_cast<int>(block_col.size()));
+}
+
+void BlockSparseMatrix::addBlock(int col, const Eigen::Ref<const Eigen::MatrixXd>& block) {
+  block_col.push_back(col);
+  value_start.push_back(static_cast<int>(values.size()));
+  for (int r = 0; r < block.rows(); ++r)
+    for (int c = 0; c < block.cols(); ++c) values.push_back(block(r, c));
+  row_start.back() = static_cast<int>(block_col.size());
+}
+
+std::string BlockSparseMatrix::validate() const {
+  const int nb = blockCount();
+  if (nb < 0) return "block-sparse W has no block offsets";
+  if (static_cast<int>(row_start.size()) != nb + 1)
+    return "block-sparse W: " + std::to_string(row_start.size() - 1) + " block rows started, " +
+           std::to_string(nb) + " expected";
+  if (block_col.size() != value_start.size()) return "block-sparse W: block index arrays differ in size";
+  if (row_start.front() != 0 || row_start.back() != static_cast<int>(block_col.size()))
+    return "block-sparse W: row starts do not cover the stored blocks";
+  for (int i = 0; i < nb; ++i) {
+    if (block_offset[i + 1] <= block_offset[i]) return "block-sparse W: empty or negative block size";
+    if (row_start[i + 1] < row_start[i]) return "block-sparse W: row starts decrease";
+  }
+  std::size_t expected_value = 0;
+  for (int i = 0; i < nb; ++i) {
+    const int ri = block_offset[i + 1] - block_offset[i];
+    for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+      const int j = block_col[k];
+      if (j < 0 || j >= nb) return "block-sparse W: block column " + std::to_string(j) + " out of range";
+      if (value_start[k] != static_cast<int>(expected_value)) return "block-sparse W: block values not contiguous";
+      expected_value += static_cast<std::size_t>(ri) * (block_offset[j + 1] - block_offset[j]);
+    }
+  }
+  if (expected_value != values.size())
+    return "block-sparse W: " + std::to_string(values.size()) + " values stored, " +
+           std::to_string(expected_value) + " expected";
+  return "";
+}
+
+Eigen::MatrixXd BlockSparseMatrix::toDense() const {
+  const int n = rows();
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < blockCount(); ++i) {
+    const int ri = block_offset[i + 1] - block_offset[i];
+    for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+      const int j = block_col[k];
+      const int cj = block_offset[j + 1] - block_offset[j];
+      const double* v = values.data() + value_start[k];
+      for (int r = 0; r < ri; ++r)
+        for (int c = 0; c < cj; ++c) dense(block_offset[i] + r, block_offset[j] + c) += v[r * cj + c];
+    }
+  }
+  return dense;
+}
+
+void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  y.setZero(rows());
+  for (int i = 0; i < blockCount(); ++i) {
+    const int row0 = block_offset[i];
+    const int ri = block_offset[i + 1] - row0;
+    for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+      const int j = block_col[k];
+      const int col0 = block_offset[j];
+      const int cj = block_offset[j + 1] - col0;
+      const double* v = values.data() + value_start[k];
+      for (int r = 0; r < ri; ++r) {
+        double sum = 0.0;
+        for (int c = 0; c < cj; ++c) sum += v[r * cj + c] * x[col0 + c];
+        y[row0 + r] += sum;
+      }
+    }
+  }
+}
+
+// ---- ComplianceMatrix helpers ---------------------------------------------------------------
+
+int complianceRows(const ComplianceMatrix& W) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return static_cast<int>(dense->rows());
+  return std::get<BlockSparseMatrix>(W).rows();
+}
+
+int complianceCols(const ComplianceMatrix& W) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return static_cast<int>(dense->cols());
+  return std::get<BlockSparseMatrix>(W).rows();
+}
+
+Eigen::MatrixXd toDense(const ComplianceMatrix& W) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return *dense;
+  return std::get<BlockSparseMatrix>(W).toDense();
+}
+
+void multiply(const ComplianceMatrix& W, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
+    y.noalias() = *dense * x;
+  } else {
+    std::get<BlockSparseMatrix>(W).multiply(x, y);
+  }
+}
+
+Eigen::MatrixXd diagonalBlock(const ComplianceMatrix& W, int offset, int n) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return dense->block(offset, offset, n, n);
+  const auto& sparse = std::get<BlockSparseMatrix>(W);
+  Eigen::MatrixXd block = Eigen::MatrixXd::Zero(n, n);
+  // Find the block row containing `offset`; sum every stored piece that overlaps the window.
+  for (int i = 0; i < sparse.blockCount(); ++i) {
+    const int r0 = sparse.block_offset[i], r1 = sparse.block_offset[i + 1];
+    if (r1 <= offset || r0 >= offset + n) continue;
+    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
+      const int j = sparse.block_col[k];
+      const int c0 = sparse.block_offset[j], c1 = sparse.block_offset[j + 1];
+      if (c1 <= offset || c0 >= offset + n) continue;
+      const double* v = sparse.values.data() + sparse.value_start[k];
+      const int cj = c1 - c0;
+      for (int r = std::max(r0, offset); r < std::min(r1, offset + n); ++r)
+        for (int c = std::max(c0, offset); c < std::min(c1, offset + n); ++c)
+          block(r - offset, c - offset) += v[(r - r0) * cj + (c - c0)];
+    }
+  }
+  return block;
+}
+
+// ---- Problem -------------------------------------------------------------------------------
+
+int Problem::rowCount() const {
+  int rows = 0;
+  for (const Contact& c : contacts) rows += c.rows;
+  return rows;
+}
+
+std::vector<int> Problem::rowOffsets() const {
+  std::vector<int> offsets(contacts.size() + 1, 0);
+  for (std::size_t i = 0; i < contacts.size(); ++i) offsets[i + 1] = offsets[i] + contacts[i].rows;
+  return offsets;
+}
+
+Problem makeLcpProblem(const Eigen::MatrixXd& M, const Eigen::VectorXd& q) {
+  Problem problem;
+  problem.contacts.resize(q.size());
+  for (int i = 0; i < q.size(); ++i) {
+    problem.contacts[i].id = i;
+    problem.contacts[i].type = ContactType::kFrictionless;
+    problem.contacts[i].rows = 1;
+    problem.contacts[i].mu = 0.0;
+  }
+  problem.W = M;
+  problem.d_free = q;
+  return problem;
+}
+
+namespace {
+
+bool allFinite(const double* v, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return false;
+  return true;
+}
+
+std::string validateContacts(const Problem& problem) {
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Contact& c = problem.contacts[i];
+    const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
+    switch (c.type) {
+      case ContactType::kFrictional:
+        if (c.rows != 3) return name + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";
+        break;
+      case ContactType::kFrictionless:
+        if (c.rows != 1) return name + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
+        break;
+      case ContactType::kBilateral:
+        if (c.rows < 1 || c.rows > 6) return name + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
+        break;
+      default:
+        return name + " has an unknown type " + std::to_string(static_cast<int>(c.type));
+    }
+    if (std::isnan(c.mu) || std::isinf(c.mu)) return name + " has a non-finite mu";
+    // Negative means "use the default": only exactly the sentinel range is allowed, so a
+    // typo like -0.3 is not silently replaced by the default.
+    if (c.mu < 0.0 && c.mu != -1.0) return name + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string validateProblem(const Problem& problem, int max_rows) {
+  if (problem.contacts.empty()) return "the problem has no contacts";
+  if (std::string err = validateContacts(problem); !err.empty()) return err;
+  const long long rows = problem.rowCount();
+  if (max_rows > 0 && rows > max_rows)
+    return "the problem has " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(max_rows);
+  if (problem.d_free.size() != rows)
+    return "d_free has " + std::to_string(problem.d_free.size()) + " entries, the contacts have " + std::to_string(rows) + " rows";
+  if (!allFinite(problem.d_free.data(), problem.d_free.size())) return "d_free holds a non-finite value";
+  if (complianceRows(problem.W) != rows || complianceCols(problem.W) != rows)
+    return "W is " + std::to_string(complianceRows(problem.W)) + "x" + std::to_string(complianceCols(problem.W)) +
+           ", the contacts have " + std::to_string(rows) + " rows";
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+    if (!allFinite(dense->data(), dense->size())) return "W holds a non-finite value";
+  } else {
+    const auto& sparse = std::get<BlockSparseMatrix>(problem.W);
+    if (std::string err = sparse.validate(); !err.empty()) return err;
+    if (!allFinite(sparse.values.data(), sparse.values.size())) return "W holds a non-finite value";
+    const std::vector<int> offsets = problem.rowOffsets();
+    if (sparse.block_offset != offsets) return "block-sparse W's blocks do not match the contacts' rows";
+  }
+  return "";
+}
+
+}  // namespace lcp_contact_solver

@@ -1,0 +1,112 @@
+#include "lcp_contact_solver/core/residual.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace lcp_contact_solver {
+
+// Projection onto K = {|r_t| <= mu r_n}: inside stays, the polar cone maps to 0, the rest
+// goes to the nearest boundary ray: r_n' = (r_n + mu |r_t|) / (1 + mu²), r_t' = mu r_n' r_t/|r_t|.
+void projectOntoCone(double mu, double* r) {
+  const double rt = std::hypot(r[1], r[2]);
+  if (rt <= mu * r[0]) return;
+  if (mu * rt <= -r[0]) {
+    r[0] = r[1] = r[2] = 0.0;
+    return;
+  }
+  const double rn = (r[0] + mu * rt) / (1.0 + mu * mu);
+  const double scale = mu * rn / rt;  // rt > 0 here: rt == 0 fell in one of the cases above
+  r[0] = rn;
+  r[1] *= scale;
+  r[2] *= scale;
+}
+
+std::vector<double> effectiveMu(const Problem& problem, double default_mu) {
+  std::vector<double> mu(problem.contacts.size(), 0.0);
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Contact& c = problem.contacts[i];
+    if (c.type == ContactType::kFrictional) mu[i] = c.mu < 0.0 ? default_mu : c.mu;
+  }
+  return mu;
+}
+
+namespace {
+
+bool isIgnored(const std::vector<bool>& ignored, std::size_t i) {
+  return !ignored.empty() && ignored[i];
+}
+
+// Squared natural-map error of one contact (see residual.h).
+double contactErrorSquared(const Contact& c, double mu, const double* lambda, const double* d) {
+  switch (c.type) {
+    case ContactType::kFrictional: {
+      // De Saxcé's modified velocity makes the Coulomb law a cone complementarity problem.
+      const double dt = std::hypot(d[1], d[2]);
+      double x[3] = {lambda[0] - (d[0] + mu * dt), lambda[1] - d[1], lambda[2] - d[2]};
+      projectOntoCone(mu, x);
+      double sum = 0.0;
+      for (int k = 0; k < 3; ++k) sum += (lambda[k] - x[k]) * (lambda[k] - x[k]);
+      return sum;
+    }
+    case ContactType::kFrictionless: {
+      const double e = lambda[0] - std::max(0.0, lambda[0] - d[0]);
+      return e * e;
+    }
+    case ContactType::kBilateral: {
+      double sum = 0.0;
+      for (int k = 0; k < c.rows; ++k) sum += d[k] * d[k];
+      return sum;
+    }
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
+                          const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
+                          const std::vector<bool>& ignored) {
+  double sum = 0.0;
+  int row = 0;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Contact& c = problem.contacts[i];
+    if (!isIgnored(ignored, i)) sum += contactErrorSquared(c, mu[i], lambda.data() + row, d.data() + row);
+    row += c.rows;
+  }
+  const double q_norm = problem.d_free.norm();
+  const double scale = q_norm > 0.0 ? q_norm : 1.0;
+  const double residual = std::sqrt(sum) / scale;
+  // An overflowed sum must still read as "far from converged", never NaN.
+  return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
+}
+
+std::vector<ContactState> classifyContacts(const Problem& problem, const std::vector<double>& mu,
+                                           const Eigen::VectorXd& lambda,
+                                           const std::vector<bool>& ignored) {
+  // A force within this fraction of the cone's radius counts as on the boundary.
+  constexpr double kBoundaryFraction = 1e-6;
+  std::vector<ContactState> states(problem.contacts.size(), ContactState::kOpen);
+  int row = 0;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Contact& c = problem.contacts[i];
+    const double* l = lambda.data() + row;
+    row += c.rows;
+    if (isIgnored(ignored, i)) {
+      states[i] = ContactState::kIgnored;
+    } else if (c.type == ContactType::kBilateral) {
+      states[i] = ContactState::kStick;
+    } else if (l[0] <= 0.0) {
+      states[i] = ContactState::kOpen;
+    } else if (c.type == ContactType::kFrictionless) {
+      states[i] = ContactState::kSlip;
+    } else {
+      const double radius = mu[i] * l[0];
+      const double tangential = std::hypot(l[1], l[2]);
+      states[i] = tangential < radius * (1.0 - kBoundaryFraction) ? ContactState::kStick : ContactState::kSlip;
+    }
+  }
+  return states;
+}
+
+}  // namespace lcp_contact_solver

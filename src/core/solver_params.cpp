@@ -1,0 +1,72 @@
+#include "lcp_contact_solver/core/solver_params.h"
+
+#include <cmath>
+
+namespace lcp_contact_solver {
+
+namespace {
+
+struct SolverEntry {
+  SolverKind kind;
+  const char* name;
+};
+
+constexpr SolverEntry kSolvers[] = {
+    {SolverKind::kAuto, "auto"},
+    {SolverKind::kPgs, "pgs"},
+    {SolverKind::kNlgs, "nlgs"},
+    {SolverKind::kLemke, "lemke"},
+};
+
+}  // namespace
+
+const char* solverName(SolverKind kind) {
+  for (const auto& entry : kSolvers)
+    if (entry.kind == kind) return entry.name;
+  return "unknown";
+}
+
+bool parseSolverName(const std::string& name, SolverKind* kind) {
+  for (const auto& entry : kSolvers) {
+    if (name == entry.name) {
+      *kind = entry.kind;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::vector<std::string> solverNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : kSolvers) names.emplace_back(entry.name);
+  return names;
+}
+
+const char* stoppingRuleName(StoppingRule rule) {
+  return rule == StoppingRule::kSofa ? "sofa" : "residual";
+}
+
+bool parseStoppingRule(const std::string& name, StoppingRule* rule) {
+  if (name == "residual") {
+    *rule = StoppingRule::kResidual;
+  } else if (name == "sofa") {
+    *rule = StoppingRule::kSofa;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+std::string validateParams(const SolverParams& p) {
+  auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!std::isfinite(p.tolerance) || p.tolerance <= 0.0) return "tolerance must be a finite number > 0";
+  if (p.maxIt < 1) return "maxIt must be >= 1";
+  if (!nonNegative(p.mu)) return "mu must be a finite number >= 0";
+  if (!nonNegative(p.regularizationTerm)) return "regularizationTerm must be a finite number >= 0";
+  if (!nonNegative(p.minW)) return "minW must be a finite number >= 0";
+  if (!nonNegative(p.maxF)) return "maxF must be a finite number >= 0 (0 disables it)";
+  if (p.max_rows < 0) return "max_rows must be >= 0 (0 disables the limit)";
+  return "";
+}
+
+}  // namespace lcp_contact_solver

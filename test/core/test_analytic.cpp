@@ -1,0 +1,209 @@
+// Cases with a known exact answer, through every solver that applies.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace lcp_contact_solver {
+namespace {
+
+Problem oneFrictionalContact(const Eigen::Matrix3d& W, const Eigen::Vector3d& d_free, double mu) {
+  Problem p;
+  p.contacts.push_back(Contact{7, ContactType::kFrictional, 3, mu});
+  p.W = Eigen::MatrixXd(W);
+  p.d_free = d_free;
+  return p;
+}
+
+SolverParams tight(SolverKind kind) {
+  SolverParams params;
+  params.solver = kind;
+  params.tolerance = 1e-12;
+  params.initial_guess = false;
+  return params;
+}
+
+TEST(Analytic, RestingContactNormalForceIsMinusDOverW) {
+  // A body resting on the ground: the normal force cancels the free penetration.
+  Eigen::Matrix3d W = Eigen::Matrix3d::Identity() * 0.5;
+  const Problem p = oneFrictionalContact(W, Eigen::Vector3d(-0.2, 0.0, 0.0), 0.6);
+  for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kAuto}) {
+    const SolveResult r = solveProblem(p, tight(kind));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << r.message;
+    EXPECT_NEAR(r.forces[0], 0.2 / 0.5, 1e-12);
+    EXPECT_NEAR(r.forces[1], 0.0, 1e-12);
+    EXPECT_NEAR(r.forces[2], 0.0, 1e-12);
+    EXPECT_NEAR(r.d[0], 0.0, 1e-12);
+    EXPECT_EQ(r.states[0], ContactState::kStick);
+    EXPECT_LE(r.residual, 1e-12);
+  }
+}
+
+TEST(Analytic, FrictionlessRestingContactThroughPgsAndLemke) {
+  Problem p = makeLcpProblem(Eigen::MatrixXd::Constant(1, 1, 4.0), Eigen::VectorXd::Constant(1, -2.0));
+  for (SolverKind kind : {SolverKind::kPgs, SolverKind::kLemke, SolverKind::kAuto}) {
+    const SolveResult r = solveProblem(p, tight(kind));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind) << ": " << r.message;
+    EXPECT_NEAR(r.forces[0], 0.5, 1e-12);
+    EXPECT_EQ(r.states[0], ContactState::kSlip);  // frictionless and pressed: free to slide
+  }
+}
+
+TEST(Analytic, SlidingContactFrictionOnConeOppositeSlip) {
+  // Uncoupled W: the tangential free motion (0.6, -0.8) is too large to stop with
+  // μ λ_n, so the contact slides and friction lies on the cone, opposite the slip.
+  const double w = 2.0, mu = 0.5;
+  const Eigen::Vector3d d_free(-1.0, 0.6, -0.8);
+  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity() * w, d_free, mu);
+  const SolveResult r = solveProblem(p, tight(SolverKind::kNlgs));
+  ASSERT_EQ(r.status, SolveStatus::kConverged) << r.message;
+  const double lambda_n = 1.0 / w;  // normal decoupled from tangents
+  EXPECT_NEAR(r.forces[0], lambda_n, 1e-12);
+  const Eigen::Vector2d slip_free(0.6, -0.8);  // |1.0| > what friction can stop: w μ λ_n = 0.5
+  ASSERT_GT(slip_free.norm(), w * mu * lambda_n);
+  const Eigen::Vector2d expected = -mu * lambda_n * slip_free.normalized();
+  EXPECT_NEAR(r.forces[1], expected[0], 1e-12);
+  EXPECT_NEAR(r.forces[2], expected[1], 1e-12);
+  // The resulting slip velocity points along the free slip, opposite the friction force.
+  const Eigen::Vector2d slip(r.d[1], r.d[2]);
+  EXPECT_GT(slip.norm(), 0.0);
+  EXPECT_NEAR(slip.normalized().dot(expected.normalized()), -1.0, 1e-12);
+  EXPECT_EQ(r.states[0], ContactState::kSlip);
+}
+
+TEST(Analytic, SlidingWithCoupledAnisotropicBlockStillOpposesSlip) {
+  // A full symmetric positive definite block: friction must still oppose the *resulting*
+  // slip velocity (Coulomb's maximum dissipation), not just the free one.
+  Eigen::Matrix3d W;
+  W << 2.0, 0.3, -0.2,
+       0.3, 1.5, 0.4,
+      -0.2, 0.4, 0.8;
+  const Problem p = oneFrictionalContact(W, Eigen::Vector3d(-1.0, 2.0, -1.5), 0.3);
+  const SolveResult r = solveProblem(p, tight(SolverKind::kNlgs));
+  ASSERT_EQ(r.status, SolveStatus::kConverged) << r.message;
+  EXPECT_GT(r.forces[0], 0.0);
+  EXPECT_NEAR(r.d[0], 0.0, 1e-12);
+  const Eigen::Vector2d force(r.forces[1], r.forces[2]);
+  const Eigen::Vector2d slip(r.d[1], r.d[2]);
+  EXPECT_NEAR(force.norm(), 0.3 * r.forces[0], 1e-12);
+  EXPECT_NEAR(force.normalized().dot(slip.normalized()), -1.0, 1e-10);
+  EXPECT_EQ(r.states[0], ContactState::kSlip);
+}
+
+TEST(Analytic, SeparatingContactHasZeroForce) {
+  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.1, 0.5, 0.0), 0.8);
+  for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kAuto}) {
+    const SolveResult r = solveProblem(p, tight(kind));
+    ASSERT_EQ(r.status, SolveStatus::kConverged);
+    EXPECT_EQ(r.forces.norm(), 0.0);
+    EXPECT_EQ(r.states[0], ContactState::kOpen);
+    EXPECT_NEAR(r.d[0], 0.1, 0.0);
+  }
+}
+
+TEST(Analytic, TwoCoupledContactsMatchLemkeAndGaussSeidel) {
+  // w = M z + q with M = [[2,1],[1,2]], q = [-5,-6]: both contacts pressed,
+  // z = M⁻¹(-q) = (4/3, 7/3).
+  Eigen::MatrixXd M(2, 2);
+  M << 2, 1, 1, 2;
+  const Problem p = makeLcpProblem(M, Eigen::Vector2d(-5, -6));
+  for (SolverKind kind : {SolverKind::kLemke, SolverKind::kPgs}) {
+    const SolveResult r = solveProblem(p, tight(kind));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind);
+    EXPECT_NEAR(r.forces[0], 4.0 / 3.0, 1e-10);
+    EXPECT_NEAR(r.forces[1], 7.0 / 3.0, 1e-10);
+  }
+  // One contact opens: q = [1, -6] → z = (0, 3), w = (4, 0).
+  const Problem open = makeLcpProblem(M, Eigen::Vector2d(1, -6));
+  const SolveResult r = solveProblem(open, tight(SolverKind::kLemke));
+  ASSERT_EQ(r.status, SolveStatus::kConverged);
+  EXPECT_NEAR(r.forces[0], 0.0, 1e-12);
+  EXPECT_NEAR(r.forces[1], 3.0, 1e-12);
+  EXPECT_NEAR(r.d[0], 4.0, 1e-12);
+  EXPECT_EQ(r.states[0], ContactState::kOpen);
+}
+
+TEST(Analytic, BilateralRowHoldsWithFreeSign) {
+  // A bilateral row pulled apart needs a negative force; a unilateral one would open.
+  Problem p;
+  p.contacts.push_back(Contact{1, ContactType::kBilateral, 1, Contact::kMuDefault});
+  p.W = Eigen::MatrixXd::Constant(1, 1, 2.0);
+  p.d_free = Eigen::VectorXd::Constant(1, 0.4);
+  const SolveResult r = solveProblem(p, tight(SolverKind::kNlgs));
+  ASSERT_EQ(r.status, SolveStatus::kConverged);
+  EXPECT_NEAR(r.forces[0], -0.2, 1e-12);
+  EXPECT_NEAR(r.d[0], 0.0, 1e-12);
+  EXPECT_EQ(r.states[0], ContactState::kStick);
+}
+
+TEST(Analytic, ZeroFrictionContactCostsOneRow) {
+  // μ = 0 on a frictional contact: tangential forces stay exactly zero, pgs applies.
+  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-1.0, 0.7, 0.2), 0.0);
+  const SolveResult r = solveProblem(p, tight(SolverKind::kPgs));
+  ASSERT_EQ(r.status, SolveStatus::kConverged) << r.message;
+  EXPECT_EQ(r.forces[1], 0.0);
+  EXPECT_EQ(r.forces[2], 0.0);
+  EXPECT_NEAR(r.forces[0], 1.0, 1e-12);
+  EXPECT_EQ(r.states[0], ContactState::kSlip);
+}
+
+TEST(Analytic, PerContactMuOverridesDefault) {
+  // Two identical sliding contacts, one with its own μ = 0.1, one using the default 0.6.
+  Problem p;
+  p.contacts.push_back(Contact{1, ContactType::kFrictional, 3, 0.1});
+  p.contacts.push_back(Contact{2, ContactType::kFrictional, 3, Contact::kMuDefault});
+  p.W = Eigen::MatrixXd(Eigen::MatrixXd::Identity(6, 6));
+  p.d_free.resize(6);
+  p.d_free << -1, 5, 0, -1, 5, 0;
+  const SolveResult r = solveProblem(p, tight(SolverKind::kNlgs));
+  ASSERT_EQ(r.status, SolveStatus::kConverged);
+  EXPECT_NEAR(r.forces[1], -0.1, 1e-12);
+  EXPECT_NEAR(r.forces[4], -0.6, 1e-12);
+}
+
+TEST(Analytic, SparseAndDenseStoragesGiveTheSameForces) {
+  Eigen::MatrixXd W(6, 6);
+  W << 2.0, 0.1, 0.0, 0.5, 0.0, 0.1,
+       0.1, 1.0, 0.0, 0.0, 0.2, 0.0,
+       0.0, 0.0, 1.0, 0.1, 0.0, 0.0,
+       0.5, 0.0, 0.1, 2.0, 0.0, 0.0,
+       0.0, 0.2, 0.0, 0.0, 1.0, 0.1,
+       0.1, 0.0, 0.0, 0.0, 0.1, 1.0;
+  Problem dense;
+  dense.contacts = {Contact{1, ContactType::kFrictional, 3, 0.4}, Contact{2, ContactType::kFrictional, 3, 0.4}};
+  dense.W = W;
+  dense.d_free.resize(6);
+  dense.d_free << -1.0, 0.3, -0.1, -0.5, 0.9, 0.2;
+  Problem sparse = dense;
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes({3, 3});
+  for (int i = 0; i < 2; ++i) {
+    B.beginRow();
+    for (int j = 0; j < 2; ++j) B.addBlock(j, W.block(3 * i, 3 * j, 3, 3));
+  }
+  sparse.W = B;
+  ASSERT_EQ(validateProblem(sparse), "");
+  const SolveResult a = solveProblem(dense, tight(SolverKind::kNlgs));
+  const SolveResult b = solveProblem(sparse, tight(SolverKind::kNlgs));
+  ASSERT_EQ(a.status, SolveStatus::kConverged);
+  ASSERT_EQ(b.status, SolveStatus::kConverged);
+  EXPECT_LE((a.forces - b.forces).norm(), 1e-10);
+  EXPECT_LE(a.residual, 1e-12);
+}
+
+TEST(Analytic, ConeProjection) {
+  double inside[3] = {1.0, 0.1, 0.1};
+  projectOntoCone(0.5, inside);
+  EXPECT_DOUBLE_EQ(inside[1], 0.1);
+  double polar[3] = {-1.0, 0.1, 0.0};
+  projectOntoCone(0.5, polar);
+  EXPECT_EQ(polar[0], 0.0);
+  double outside[3] = {1.0, 2.0, 0.0};
+  projectOntoCone(0.5, outside);
+  EXPECT_NEAR(outside[1], 0.5 * outside[0], 1e-15);
+  EXPECT_NEAR(outside[0], (1.0 + 0.5 * 2.0) / 1.25, 1e-15);
+}
+
+}  // namespace
+}  // namespace lcp_contact_solver

@@ -1,0 +1,104 @@
+// Problem structure and validation: bad input gets a sentence, never a crash.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/problem.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace lcp_contact_solver {
+namespace {
+
+Problem twoContacts() {
+  Problem p;
+  p.contacts = {Contact{1, ContactType::kFrictional, 3, 0.5}, Contact{2, ContactType::kFrictionless, 1, 0.0}};
+  p.W = Eigen::MatrixXd(Eigen::MatrixXd::Identity(4, 4));
+  p.d_free = Eigen::Vector4d(-1, 0, 0, -1);
+  return p;
+}
+
+TEST(Problem, RowOffsetsFollowContactTypes) {
+  const Problem p = twoContacts();
+  EXPECT_EQ(p.rowCount(), 4);
+  EXPECT_EQ(p.rowOffsets(), (std::vector<int>{0, 3, 4}));
+  EXPECT_EQ(validateProblem(p), "");
+}
+
+TEST(Problem, ValidationNamesTheFault) {
+  Problem p = twoContacts();
+  p.d_free[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(validateProblem(p).find("d_free"), std::string::npos);
+
+  p = twoContacts();
+  std::get<Eigen::MatrixXd>(p.W)(1, 2) = std::numeric_limits<double>::infinity();
+  EXPECT_NE(validateProblem(p).find("non-finite"), std::string::npos);
+
+  p = twoContacts();
+  p.W = Eigen::MatrixXd(Eigen::MatrixXd::Identity(5, 5));
+  EXPECT_NE(validateProblem(p).find("W is 5x5"), std::string::npos);
+
+  p = twoContacts();
+  p.contacts[0].mu = -0.3;
+  EXPECT_NE(validateProblem(p).find("negative mu"), std::string::npos);
+
+  p = twoContacts();
+  p.contacts[1].rows = 3;
+  EXPECT_NE(validateProblem(p).find("frictionless"), std::string::npos);
+
+  EXPECT_NE(validateProblem(Problem()).find("no contacts"), std::string::npos);
+  EXPECT_NE(validateProblem(twoContacts(), 2).find("limit"), std::string::npos);
+}
+
+TEST(Problem, InvalidProblemGivesInvalidInputStatusAndNoNumbers) {
+  Problem p = twoContacts();
+  p.d_free.resize(2);
+  const SolveResult r = solveProblem(p, SolverParams());
+  EXPECT_EQ(r.status, SolveStatus::kInvalidInput);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.forces.size(), 0);
+  EXPECT_FALSE(r.message.empty());
+}
+
+TEST(Problem, BlockSparseRoundTripsThroughDense) {
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(4, 4);
+  W << 2, 0, 0, 1,
+       0, 1, 0, 0,
+       0, 0, 1, 0,
+       1, 0, 0, 3;
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes({3, 1});
+  B.beginRow();
+  B.addBlock(0, W.block(0, 0, 3, 3));
+  B.addBlock(1, W.block(0, 3, 3, 1));
+  B.beginRow();
+  B.addBlock(0, W.block(3, 0, 1, 3));
+  B.addBlock(1, W.block(3, 3, 1, 1));
+  EXPECT_EQ(B.validate(), "");
+  EXPECT_EQ(B.toDense(), W);
+  Eigen::VectorXd x(4), y;
+  x << 1, 2, 3, 4;
+  B.multiply(x, y);
+  EXPECT_EQ(y, W * x);
+  ComplianceMatrix C = B;
+  EXPECT_EQ(diagonalBlock(C, 0, 3), W.block(0, 0, 3, 3));
+  EXPECT_EQ(diagonalBlock(C, 3, 1), W.block(3, 3, 1, 1));
+
+  Problem p = twoContacts();
+  p.W = B;
+  EXPECT_EQ(validateProblem(p), "");
+  B.values.pop_back();
+  p.W = B;
+  EXPECT_NE(validateProblem(p), "");
+}
+
+TEST(Problem, SolverNamesRoundTrip) {
+  for (const std::string& name : solverNames()) {
+    SolverKind kind;
+    ASSERT_TRUE(parseSolverName(name, &kind));
+    EXPECT_EQ(name, solverName(kind));
+  }
+  SolverKind kind;
+  EXPECT_FALSE(parseSolverName("nope", &kind));
+}
+
+}  // namespace
+}  // namespace lcp_contact_solver
