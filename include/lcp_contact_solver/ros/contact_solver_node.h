@@ -1,0 +1,112 @@
+// The ROS face of the solver, shared by the node and the nodelet: pairs `contacts` with
+// `compliance` by stamp, solves each pair once, publishes `constraint_forces`, `~stats`,
+// `~markers` (when subscribed) and /diagnostics, serves `~solve_contacts`, and takes
+// parameter changes through dynamic_reconfigure between solves.
+#pragma once
+
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/pairing_monitor.h"
+#include "lcp_contact_solver/ros/solver_params_ros.h"
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
+#include <dynamic_reconfigure/server.h>
+#include <lcp_contact_solver/Compliance.h>
+#include <lcp_contact_solver/ContactArray.h>
+#include <lcp_contact_solver/ContactSolverConfig.h>
+#include <lcp_contact_solver/SolveContacts.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <ros/ros.h>
+
+#include <boost/thread/recursive_mutex.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace lcp_contact_solver_ros {
+
+class ContactSolverNode {
+ public:
+  // Reads the private parameters; throws std::invalid_argument naming the bad one.
+  ContactSolverNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);
+
+ private:
+  using ContactArray = lcp_contact_solver::ContactArray;
+  using Compliance = lcp_contact_solver::Compliance;
+  using Config = lcp_contact_solver::ContactSolverConfig;
+  using SyncPolicy = message_filters::sync_policies::ExactTime<ContactArray, Compliance>;
+
+  // Counts behind /diagnostics.
+  struct Health {
+    std::uint64_t solves = 0;
+    std::uint64_t not_converged = 0;
+    std::uint64_t rejected = 0;
+    std::uint64_t unpaired = 0;
+    std::uint64_t problems_since_report = 0;  // rejections, unpaired, failed solves
+    double last_residual = 0.0;
+    std::string last_status = "no solve yet";
+    bool last_converged = true;
+  };
+
+  void setUpTopics();
+  void setUpReconfigure();
+  void setUpDiagnostics();
+
+  void onContacts(const ContactArray::ConstPtr& contacts);
+  void onPair(const ContactArray::ConstPtr& contacts, const Compliance::ConstPtr& compliance);
+  bool onSolveService(lcp_contact_solver::SolveContacts::Request& request,
+                      lcp_contact_solver::SolveContacts::Response& response);
+  void onReconfigure(Config& config, std::uint32_t level);
+  void onTimer(const ros::TimerEvent& event);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  // Cycle steps; the caller holds solve_mutex_.
+  void applyAcceptedSettings();
+  void recordSolve(const lcs::SolveResult& result);
+  void reject(const std_msgs::Header& header, std::uint8_t status_code, const std::string& message);
+  bool publishForces(const ContactArray& contacts, const std::vector<ContactFrame>& frames,
+                     const lcs::Problem& problem, const lcs::SolveResult& result);
+  bool publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
+                      const lcs::Problem& problem, const lcs::SolveResult& result);
+  void logCycle(const lcs::Problem& problem, const lcs::SolveResult& result);
+  void reportUnpaired();
+
+  NodeSettings latestSettings();
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle pnh_;
+
+  std::mutex settings_mutex_;  // guards accepted_ and settings_changed_
+  NodeSettings accepted_;      // latest valid settings; the next cycle applies them
+  bool settings_changed_ = false;
+
+  std::mutex solve_mutex_;  // guards the members down to health_
+  NodeSettings active_;     // settings of the current cycle
+  lcs::ContactSolver solver_;
+  PairingMonitor pairing_;
+  Health health_;
+
+  ros::Publisher forces_pub_;
+  ros::Publisher stats_pub_;
+  ros::Publisher markers_pub_;
+  ros::ServiceServer solve_service_;
+  message_filters::Subscriber<ContactArray> contacts_sub_;
+  message_filters::Subscriber<Compliance> compliance_sub_;
+  std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
+
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_;
+
+  diagnostic_updater::Updater updater_;
+  double min_rate_ = 0.0;  // FrequencyStatus keeps pointers to these
+  double max_rate_ = 0.0;
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> frequency_;
+  ros::Timer timer_;
+};
+
+}  // namespace lcp_contact_solver_ros

@@ -1,0 +1,387 @@
+#include "lcp_contact_solver/ros/msg_conversion.h"
+
+#include "lcp_contact_solver/core/contact_frame.h"
+
+#include "lcp_contact_solver/core/contact_solver.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <numeric>
+#include <set>
+#include <utility>
+
+namespace lcp_contact_solver_ros {
+
+namespace {
+
+// Directions closer to zero than this are "not given" (tangents) or invalid (normal).
+constexpr double kZeroLength = 1e-9;
+// Given tangents must be orthogonal to the normal and to each other within this cosine.
+constexpr double kOrthogonalityTolerance = 1e-3;
+// Bounds the allocation a hostile message can cause when max_rows is 0 (no limit).
+constexpr std::int64_t kHardRowLimit = 1000000;
+
+Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v) { return {v.x, v.y, v.z}; }
+Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
+
+geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v) {
+  geometry_msgs::Vector3 out;
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+  return out;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& v) {
+  geometry_msgs::Point out;
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+  return out;
+}
+
+std::string contactName(std::size_t index, std::int64_t id) {
+  return "contact " + std::to_string(index) + " (id " + std::to_string(id) + ")";
+}
+
+// Row count of a contact message, or -1 with `error` set.
+int contactRows(const lcs::ContactPoint& c, std::string* error) {
+  switch (c.type) {
+    case lcs::ContactPoint::FRICTIONAL:
+    case lcs::ContactPoint::FRICTIONLESS: {
+      const int fixed = c.type == lcs::ContactPoint::FRICTIONAL ? 3 : 1;
+      if (c.rows != 0 && static_cast<int>(c.rows) != fixed) {
+        *error = "has rows=" + std::to_string(c.rows) + " but its type has " + std::to_string(fixed);
+        return -1;
+      }
+      return fixed;
+    }
+    case lcs::ContactPoint::BILATERAL:
+      if (c.rows < 1 || c.rows > 6) {
+        *error = "is bilateral with rows=" + std::to_string(c.rows) + " (1..6 expected)";
+        return -1;
+      }
+      return static_cast<int>(c.rows);
+    default:
+      *error = "has an unknown type " + std::to_string(c.type);
+      return -1;
+  }
+}
+
+std::string checkMu(double mu) {
+  if (!std::isfinite(mu)) return "has a non-finite mu";
+  if (mu < 0.0 && mu != lcs::ContactPoint::MU_DEFAULT)
+    return "has a negative mu " + std::to_string(mu) + " (use MU_DEFAULT=-1 for the node's mu)";
+  return "";
+}
+
+std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
+  std::string error;
+  const int rows = contactRows(msg, &error);
+  if (rows < 0) return error;
+  if (static_cast<int>(msg.d_free.size()) != rows)
+    return "has " + std::to_string(msg.d_free.size()) + " d_free values for " + std::to_string(rows) + " rows";
+  error = checkMu(msg.mu);
+  if (!error.empty()) return error;
+  contact->id = msg.id;
+  contact->type = static_cast<lcs::ContactType>(msg.type);
+  contact->rows = rows;
+  contact->mu = msg.mu;
+  return "";
+}
+
+std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Problem* problem,
+                         std::vector<ContactFrame>* frames) {
+  if (msg.contacts.empty()) return "the contact array is empty";
+  problem->contacts.resize(msg.contacts.size());
+  frames->resize(msg.contacts.size());
+  std::set<std::int64_t> ids;
+  std::int64_t rows = 0;
+  for (std::size_t i = 0; i < msg.contacts.size(); ++i) {
+    const lcs::ContactPoint& c = msg.contacts[i];
+    std::string error = toCoreContact(c, &problem->contacts[i]);
+    if (error.empty()) error = toContactFrame(c, &(*frames)[i]);
+    if (error.empty() && !ids.insert(c.id).second) error = "repeats an id used by an earlier contact";
+    if (!error.empty()) return contactName(i, c.id) + " " + error;
+    rows += problem->contacts[i].rows;
+  }
+  const std::int64_t limit = max_rows > 0 ? max_rows : kHardRowLimit;
+  if (rows > limit)
+    return "the contacts have " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(limit);
+  problem->d_free.resize(rows);
+  int row = 0;
+  for (const lcs::ContactPoint& c : msg.contacts)
+    for (double v : c.d_free) problem->d_free[row++] = v;
+  return "";
+}
+
+std::string readDense(const lcs::Compliance& msg, int rows, lcs::ComplianceMatrix* W) {
+  const std::size_t expected = static_cast<std::size_t>(rows) * static_cast<std::size_t>(rows);
+  if (msg.data.size() != expected)
+    return "dense compliance has " + std::to_string(msg.data.size()) + " values, " +
+           std::to_string(rows) + "x" + std::to_string(rows) + " expected";
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  *W = Eigen::MatrixXd(Eigen::Map<const RowMajor>(msg.data.data(), rows, rows));
+  return "";
+}
+
+std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& offsets,
+                            lcs::ComplianceMatrix* W) {
+  const std::size_t nb = offsets.size() - 1;
+  const std::size_t blocks = msg.block_rows.size();
+  if (msg.block_cols.size() != blocks)
+    return "block-sparse compliance has " + std::to_string(blocks) + " block_rows but " +
+           std::to_string(msg.block_cols.size()) + " block_cols";
+  std::vector<int> sizes(nb);
+  for (std::size_t i = 0; i < nb; ++i) sizes[i] = offsets[i + 1] - offsets[i];
+  // Where each block's values start in block_data, in message order.
+  std::vector<std::size_t> start(blocks + 1, 0);
+  std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+  for (std::size_t k = 0; k < blocks; ++k) {
+    const std::uint32_t i = msg.block_rows[k], j = msg.block_cols[k];
+    if (i >= nb || j >= nb)
+      return "block " + std::to_string(k) + " (" + std::to_string(i) + ", " + std::to_string(j) +
+             ") names a contact beyond the " + std::to_string(nb) + " contacts";
+    if (!seen.insert({i, j}).second)
+      return "block (" + std::to_string(i) + ", " + std::to_string(j) + ") is given twice";
+    start[k + 1] = start[k] + static_cast<std::size_t>(sizes[i]) * sizes[j];
+  }
+  if (msg.block_data.size() != start[blocks])
+    return "block-sparse compliance has " + std::to_string(msg.block_data.size()) +
+           " block_data values, its blocks need " + std::to_string(start[blocks]);
+  std::vector<std::size_t> order(blocks);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&msg](std::size_t a, std::size_t b) {
+    return std::make_pair(msg.block_rows[a], msg.block_cols[a]) < std::make_pair(msg.block_rows[b], msg.block_cols[b]);
+  });
+  lcs::BlockSparseMatrix sparse = lcs::BlockSparseMatrix::withBlockSizes(sizes);
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < nb; ++i) {
+    sparse.beginRow();
+    for (; next < blocks && msg.block_rows[order[next]] == i; ++next) {
+      const std::size_t k = order[next];
+      const int j = static_cast<int>(msg.block_cols[k]);
+      using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+      sparse.addBlock(j, Eigen::Map<const RowMajor>(msg.block_data.data() + start[k], sizes[i], sizes[j]));
+    }
+  }
+  *W = std::move(sparse);
+  return "";
+}
+
+std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& offsets,
+                           lcs::ComplianceMatrix* W) {
+  const int rows = offsets.back();
+  if (static_cast<std::int64_t>(msg.rows) != rows)
+    return "the compliance has rows=" + std::to_string(msg.rows) + ", the contacts have " + std::to_string(rows);
+  switch (msg.storage) {
+    case lcs::Compliance::STORAGE_DENSE: return readDense(msg, rows, W);
+    case lcs::Compliance::STORAGE_BLOCK_SPARSE: return readBlockSparse(msg, offsets, W);
+    default: return "the compliance has an unknown storage " + std::to_string(msg.storage);
+  }
+}
+
+// Up to three rows of a contact along (n, t1, t2); later bilateral rows have no direction.
+Eigen::Vector3d directionalForce(const lcs::Contact& contact, const double* lambda) {
+  Eigen::Vector3d components = Eigen::Vector3d::Zero();
+  for (int k = 0; k < std::min(3, contact.rows); ++k) components[k] = lambda[k];
+  return components;
+}
+
+bool finite(const geometry_msgs::Vector3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+bool finite(const geometry_msgs::Point& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+}  // namespace
+
+void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2) {
+  tangentsFromNormal(normal, tangent1, tangent2);
+}
+
+std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame) {
+  if (!finite(contact.position)) return "has a non-finite position";
+  if (!finite(contact.normal) || !finite(contact.tangent1) || !finite(contact.tangent2))
+    return "has a non-finite direction";
+  const Eigen::Vector3d n = toEigen(contact.normal);
+  if (n.norm() < kZeroLength) return "has a zero normal";
+  frame->position = toEigen(contact.position);
+  frame->normal = n.normalized();
+  const Eigen::Vector3d t1 = toEigen(contact.tangent1), t2 = toEigen(contact.tangent2);
+  const bool has_t1 = t1.norm() >= kZeroLength, has_t2 = t2.norm() >= kZeroLength;
+  if (!has_t1 && !has_t2) {
+    deriveTangents(frame->normal, &frame->tangent1, &frame->tangent2);
+    frame->derived_tangents = true;
+    return "";
+  }
+  if (has_t1 != has_t2) return "gives one tangent only (give both or neither)";
+  frame->tangent1 = t1.normalized();
+  frame->tangent2 = t2.normalized();
+  frame->derived_tangents = false;
+  if (std::abs(frame->tangent1.dot(frame->normal)) > kOrthogonalityTolerance ||
+      std::abs(frame->tangent2.dot(frame->normal)) > kOrthogonalityTolerance ||
+      std::abs(frame->tangent1.dot(frame->tangent2)) > kOrthogonalityTolerance)
+    return "has tangents that are not orthogonal to the normal and each other";
+  return "";
+}
+
+std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
+                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames) {
+  *problem = lcs::Problem();
+  std::string error = readContacts(contacts, max_rows, problem, frames);
+  if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W);
+  if (error.empty()) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
+  problem->name = contacts.header.frame_id;
+  return error;
+}
+
+lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {
+  lcs::Compliance msg;
+  msg.rows = static_cast<std::uint32_t>(lcs::complianceRows(W));
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
+    msg.storage = lcs::Compliance::STORAGE_DENSE;
+    msg.data.reserve(dense->size());
+    for (Eigen::Index r = 0; r < dense->rows(); ++r)
+      for (Eigen::Index c = 0; c < dense->cols(); ++c) msg.data.push_back((*dense)(r, c));
+    return msg;
+  }
+  const auto& sparse = std::get<lcs::BlockSparseMatrix>(W);
+  msg.storage = lcs::Compliance::STORAGE_BLOCK_SPARSE;
+  for (int i = 0; i < sparse.blockCount(); ++i) {
+    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
+      msg.block_rows.push_back(static_cast<std::uint32_t>(i));
+      msg.block_cols.push_back(static_cast<std::uint32_t>(sparse.block_col[k]));
+    }
+  }
+  msg.block_data = sparse.values;  // stored in the same (block-row) order
+  return msg;
+}
+
+lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
+                                            const std::vector<ContactFrame>& frames,
+                                            const lcs::Problem& problem,
+                                            const lcs::SolveResult& result) {
+  lcs::ConstraintForces msg;
+  msg.header = contacts.header;
+  const std::vector<int> offsets = problem.rowOffsets();
+  msg.forces.resize(problem.contacts.size());
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const lcs::Contact& contact = problem.contacts[i];
+    const ContactFrame& frame = frames[i];
+    const double* lambda = result.forces.data() + offsets[i];
+    const Eigen::Vector3d components = directionalForce(contact, lambda);
+    lcs::ContactForce& out = msg.forces[i];
+    out.id = contact.id;
+    out.body_a = contacts.contacts[i].body_a;
+    out.body_b = contacts.contacts[i].body_b;
+    out.state = static_cast<std::uint8_t>(result.states[i]);
+    out.normal_force = components[0];
+    out.tangent1_force = components[1];
+    out.tangent2_force = components[2];
+    out.force = toVector3(frame.normal * components[0] + frame.tangent1 * components[1] +
+                          frame.tangent2 * components[2]);
+    out.position = toPoint(frame.position);
+    out.normal = toVector3(frame.normal);
+    out.tangent1 = toVector3(frame.tangent1);
+    out.tangent2 = toVector3(frame.tangent2);
+    out.lambda.assign(lambda, lambda + contact.rows);
+  }
+  msg.wrenches = sumBodyPairWrenches(msg.forces);
+  return msg;
+}
+
+std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::ContactForce>& forces) {
+  std::vector<lcs::BodyPairWrench> wrenches;
+  std::map<std::pair<std::string, std::string>, std::size_t> index;
+  std::vector<Eigen::Vector3d> force_sum, torque_sum;
+  for (const lcs::ContactForce& f : forces) {
+    const auto key = std::make_pair(f.body_a, f.body_b);
+    auto it = index.find(key);
+    if (it == index.end()) {
+      it = index.emplace(key, wrenches.size()).first;
+      lcs::BodyPairWrench w;
+      w.body_a = f.body_a;
+      w.body_b = f.body_b;
+      wrenches.push_back(w);
+      force_sum.emplace_back(Eigen::Vector3d::Zero());
+      torque_sum.emplace_back(Eigen::Vector3d::Zero());
+    }
+    const Eigen::Vector3d force = toEigen(f.force);
+    force_sum[it->second] += force;
+    torque_sum[it->second] += toEigen(f.position).cross(force);
+  }
+  for (std::size_t k = 0; k < wrenches.size(); ++k) {
+    wrenches[k].wrench.force = toVector3(force_sum[k]);
+    wrenches[k].wrench.torque = toVector3(torque_sum[k]);
+  }
+  return wrenches;
+}
+
+lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::Problem& problem,
+                            const lcs::SolveResult& result) {
+  lcs::SolverStats stats;
+  stats.header = header;
+  stats.success = solveGaveForces(result);
+  stats.status_code = static_cast<std::uint8_t>(result.status);
+  stats.status = lcs::statusName(result.status);
+  stats.message = result.message;
+  stats.solver = result.solver;
+  stats.friction_model = lcs::frictionModelName(result.friction_model);
+  stats.iterations = result.iterations;
+  stats.residual = result.residual;
+  stats.solver_error = result.solver_error;
+  stats.converged = result.converged;
+  stats.solve_time = result.solve_time;
+  stats.num_contacts = static_cast<std::int32_t>(problem.contacts.size());
+  stats.num_rows = problem.rowCount();
+  return stats;
+}
+
+lcs::SolverStats rejectedStatsMsg(const std_msgs::Header& header, std::uint8_t status_code,
+                                  const std::string& message) {
+  lcs::SolverStats stats;
+  stats.header = header;
+  stats.success = false;
+  stats.status_code = status_code;
+  stats.status = statusCodeName(status_code);
+  stats.message = message;
+  return stats;
+}
+
+std::string statusCodeName(std::uint8_t status_code) {
+  if (status_code == lcs::SolverStats::NO_COMPLIANCE) return "no_compliance";
+  if (status_code < lcs::SolverStats::NO_COMPLIANCE)
+    return lcs::statusName(static_cast<lcs::SolveStatus>(status_code));  // "unknown" past the last
+  return "unknown";
+}
+
+bool solveGaveForces(const lcs::SolveResult& result) {
+  return result.status == lcs::SolveStatus::kConverged || result.status == lcs::SolveStatus::kMaxIterations ||
+         result.status == lcs::SolveStatus::kTimeBudget;
+}
+
+bool allFinite(const lcs::ConstraintForces& forces) {
+  for (const lcs::ContactForce& f : forces.forces) {
+    if (!std::isfinite(f.normal_force) || !std::isfinite(f.tangent1_force) || !std::isfinite(f.tangent2_force) ||
+        !finite(f.force) || !finite(f.position) || !finite(f.normal) || !finite(f.tangent1) || !finite(f.tangent2))
+      return false;
+    for (double v : f.lambda)
+      if (!std::isfinite(v)) return false;
+  }
+  for (const lcs::BodyPairWrench& w : forces.wrenches)
+    if (!finite(w.wrench.force) || !finite(w.wrench.torque)) return false;
+  return true;
+}
+
+bool allFinite(const lcs::SolverStats& stats) {
+  return std::isfinite(stats.residual) && std::isfinite(stats.solver_error) && std::isfinite(stats.solve_time);
+}
+
+}  // namespace lcp_contact_solver_ros

@@ -1,0 +1,474 @@
+// Unit tests of the ROS layer that need no master: message conversions, parameters,
+// markers, pairing and the debug summary.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/ros/cycle_log.h"
+#include "lcp_contact_solver/ros/markers.h"
+#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/pairing_monitor.h"
+#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "test_scene.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <set>
+
+namespace lcs = lcp_contact_solver;
+using namespace lcp_contact_solver_ros;
+using lcp_contact_solver_test::makeScene;
+using lcp_contact_solver_test::Scene;
+
+namespace {
+
+Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v) { return {v.x, v.y, v.z}; }
+Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
+
+struct Converted {
+  lcs::Problem problem;
+  std::vector<ContactFrame> frames;
+  std::string error;
+};
+
+Converted convert(const Scene& scene, int max_rows = 0) {
+  Converted c;
+  c.error = toProblem(scene.contacts, scene.compliance, max_rows, &c.problem, &c.frames);
+  return c;
+}
+
+const ros::Time kStamp(100, 0);
+
+}  // namespace
+
+// ---- tangents -------------------------------------------------------------------------
+
+TEST(DeriveTangents, RightHandedOrthonormalAndDeterministic) {
+  for (const Eigen::Vector3d& raw : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, -1, 0),
+                                      Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-0.3, 0.2, 0.9)}) {
+    const Eigen::Vector3d n = raw.normalized();
+    Eigen::Vector3d t1, t2, again1, again2;
+    deriveTangents(n, &t1, &t2);
+    deriveTangents(n, &again1, &again2);
+    EXPECT_NEAR(t1.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(t2.norm(), 1.0, 1e-12);
+    EXPECT_NEAR(t1.dot(n), 0.0, 1e-12);
+    EXPECT_NEAR(t2.dot(n), 0.0, 1e-12);
+    EXPECT_NEAR(t1.dot(t2), 0.0, 1e-12);
+    EXPECT_NEAR((n.cross(t1) - t2).norm(), 0.0, 1e-12);
+    EXPECT_EQ(t1, again1);
+    EXPECT_EQ(t2, again2);
+  }
+  Eigen::Vector3d t1, t2;
+  deriveTangents(Eigen::Vector3d::UnitZ(), &t1, &t2);  // least aligned axis: x
+  EXPECT_NEAR((t1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((t2 + Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-12);
+}
+
+// ---- contacts and compliance -----------------------------------------------------------
+
+TEST(ToProblem, ReadsContactsInOrder) {
+  const Scene scene = makeScene(10, kStamp);
+  const Converted c = convert(scene);
+  ASSERT_EQ(c.error, "");
+  ASSERT_EQ(c.problem.contacts.size(), 4u);
+  EXPECT_EQ(c.problem.rowCount(), 9);
+  EXPECT_EQ(c.problem.contacts[0].id, 10);
+  EXPECT_EQ(c.problem.contacts[0].type, lcs::ContactType::kFrictional);
+  EXPECT_EQ(c.problem.contacts[0].mu, -1.0);  // MU_DEFAULT reaches the core as "not given"
+  EXPECT_EQ(c.problem.contacts[1].mu, 0.2);
+  EXPECT_EQ(c.problem.contacts[2].type, lcs::ContactType::kFrictionless);
+  EXPECT_EQ(c.problem.contacts[2].rows, 1);
+  EXPECT_EQ(c.problem.contacts[3].type, lcs::ContactType::kBilateral);
+  EXPECT_EQ(c.problem.contacts[3].rows, 2);
+  Eigen::VectorXd d_free(9);
+  d_free << -0.02, 0.01, 0.0, -0.01, -0.02, 0.005, -0.015, 0.01, -0.01;
+  EXPECT_EQ(c.problem.d_free, d_free);
+  EXPECT_EQ(lcs::toDense(c.problem.W), lcp_contact_solver_test::coupledCompliance(9));
+}
+
+TEST(ToProblem, FramesNormalizeAndDeriveTangents) {
+  const Converted c = convert(makeScene(10, kStamp));
+  ASSERT_EQ(c.error, "");
+  EXPECT_TRUE(c.frames[0].derived_tangents);
+  EXPECT_FALSE(c.frames[1].derived_tangents);
+  EXPECT_NEAR((c.frames[1].tangent2 - Eigen::Vector3d(0, 0.8, -0.6)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((c.frames[2].normal - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-12);  // (0,0,2) normalized
+  EXPECT_NEAR((c.frames[2].position - Eigen::Vector3d(0, 0.2, 0.1)).norm(), 0.0, 1e-12);
+}
+
+TEST(ToProblem, BlockSparseEqualsDense) {
+  const Converted dense = convert(makeScene(10, kStamp));
+  const Converted sparse = convert(makeScene(10, kStamp, true));
+  ASSERT_EQ(sparse.error, "");
+  ASSERT_TRUE(std::holds_alternative<lcs::BlockSparseMatrix>(sparse.problem.W));
+  EXPECT_EQ(lcs::toDense(sparse.problem.W), lcs::toDense(dense.problem.W));
+  const lcs::SolveResult a = lcs::solveProblem(dense.problem, defaultSolverParams());
+  const lcs::SolveResult b = lcs::solveProblem(sparse.problem, defaultSolverParams());
+  EXPECT_TRUE(a.converged);
+  EXPECT_LT((a.forces - b.forces).norm(), 1e-9);
+}
+
+TEST(ToProblem, BlockSparseWithMissingBlocksIsZeroThere) {
+  Scene scene = makeScene(10, kStamp, true);
+  // Keep only the diagonal blocks.
+  lcs::Compliance diagonal;
+  diagonal.storage = lcs::Compliance::STORAGE_BLOCK_SPARSE;
+  diagonal.rows = 9;
+  const int sizes[] = {3, 3, 1, 2};
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < scene.compliance.block_rows.size(); ++k) {
+    const int i = scene.compliance.block_rows[k], j = scene.compliance.block_cols[k];
+    const std::size_t n = sizes[i] * sizes[j];
+    if (i == j) {
+      diagonal.block_rows.push_back(i);
+      diagonal.block_cols.push_back(j);
+      diagonal.block_data.insert(diagonal.block_data.end(), scene.compliance.block_data.begin() + at,
+                                 scene.compliance.block_data.begin() + at + n);
+    }
+    at += n;
+  }
+  scene.compliance = diagonal;
+  const Converted c = convert(scene);
+  ASSERT_EQ(c.error, "");
+  const Eigen::MatrixXd W = lcs::toDense(c.problem.W), full = lcp_contact_solver_test::coupledCompliance(9);
+  EXPECT_EQ(W(0, 3), 0.0);
+  EXPECT_EQ(W(6, 6), full(6, 6));
+  EXPECT_EQ(W.block(7, 7, 2, 2), full.block(7, 7, 2, 2));
+}
+
+struct BadCase {
+  const char* what;
+  std::function<void(Scene*)> spoil;
+  const char* expected;  // part of the error sentence
+};
+
+class ToProblemRejects : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(ToProblemRejects, NamesTheFault) {
+  Scene scene = makeScene(10, kStamp, std::string(GetParam().what).find("block") != std::string::npos);
+  GetParam().spoil(&scene);
+  const Converted c = convert(scene, 30000);
+  EXPECT_NE(c.error.find(GetParam().expected), std::string::npos) << "error: '" << c.error << "'";
+}
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+const double kInf = std::numeric_limits<double>::infinity();
+
+INSTANTIATE_TEST_SUITE_P(
+    Faults, ToProblemRejects,
+    ::testing::Values(
+        BadCase{"empty", [](Scene* s) { s->contacts.contacts.clear(); }, "empty"},
+        BadCase{"nan_dfree", [](Scene* s) { s->contacts.contacts[1].d_free[0] = kNaN; }, "d_free holds a non-finite"},
+        BadCase{"inf_position", [](Scene* s) { s->contacts.contacts[0].position.y = kInf; }, "contact 0 (id 10) has a non-finite position"},
+        BadCase{"nan_normal", [](Scene* s) { s->contacts.contacts[2].normal.x = kNaN; }, "non-finite direction"},
+        BadCase{"zero_normal", [](Scene* s) { s->contacts.contacts[2].normal = lcp_contact_solver_test::vec(0, 0, 0); }, "contact 2 (id 12) has a zero normal"},
+        BadCase{"negative_mu", [](Scene* s) { s->contacts.contacts[1].mu = -0.5; }, "negative mu"},
+        BadCase{"nan_mu", [](Scene* s) { s->contacts.contacts[1].mu = kNaN; }, "non-finite mu"},
+        BadCase{"dfree_size", [](Scene* s) { s->contacts.contacts[0].d_free.pop_back(); }, "2 d_free values for 3 rows"},
+        BadCase{"rows_field", [](Scene* s) { s->contacts.contacts[2].rows = 3; }, "rows=3 but its type has 1"},
+        BadCase{"bilateral_rows", [](Scene* s) { s->contacts.contacts[3].rows = 0; }, "bilateral with rows=0"},
+        BadCase{"unknown_type", [](Scene* s) { s->contacts.contacts[0].type = 7; }, "unknown type 7"},
+        BadCase{"duplicate_id", [](Scene* s) { s->contacts.contacts[3].id = 10; }, "contact 3 (id 10) repeats an id"},
+        BadCase{"one_tangent", [](Scene* s) { s->contacts.contacts[1].tangent2 = lcp_contact_solver_test::vec(0, 0, 0); }, "one tangent"},
+        BadCase{"skew_tangent", [](Scene* s) { s->contacts.contacts[1].tangent1 = lcp_contact_solver_test::vec(1, 0, 1); }, "not orthogonal"},
+        BadCase{"compliance_rows", [](Scene* s) { s->compliance.rows = 8; }, "rows=8, the contacts have 9"},
+        BadCase{"dense_size", [](Scene* s) { s->compliance.data.pop_back(); }, "80 values, 9x9 expected"},
+        BadCase{"nan_w", [](Scene* s) { s->compliance.data[40] = kNaN; }, "W holds a non-finite value"},
+        BadCase{"unknown_storage", [](Scene* s) { s->compliance.storage = 9; }, "unknown storage 9"},
+        BadCase{"too_many_rows", [](Scene* s) { s->contacts.contacts.resize(20000, s->contacts.contacts[0]);
+                                                for (int i = 0; i < 20000; ++i) s->contacts.contacts[i].id = i; },
+                "more than the limit of 30000"},
+        BadCase{"block_index", [](Scene* s) { s->compliance.block_cols[0] = 4; }, "beyond the 4 contacts"},
+        BadCase{"block_twice", [](Scene* s) { s->compliance.block_cols[1] = s->compliance.block_cols[0]; }, "is given twice"},
+        BadCase{"block_data_size", [](Scene* s) { s->compliance.block_data.push_back(1.0); }, "block_data values, its blocks need"},
+        BadCase{"block_cols_size", [](Scene* s) { s->compliance.block_cols.pop_back(); }, "block_cols"}),
+    [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.what); });
+
+TEST(ToComplianceMsg, RoundTripsBlockSparse) {
+  const Converted sparse = convert(makeScene(10, kStamp, true));
+  ASSERT_EQ(sparse.error, "");
+  Scene again = makeScene(10, kStamp);
+  again.compliance = toComplianceMsg(sparse.problem.W);
+  const Converted c = convert(again);
+  ASSERT_EQ(c.error, "");
+  EXPECT_EQ(lcs::toDense(c.problem.W), lcs::toDense(sparse.problem.W));
+}
+
+// ---- forces and stats -----------------------------------------------------------------
+
+TEST(ToConstraintForcesMsg, ForcesFollowTheContactFrames) {
+  const Scene scene = makeScene(10, kStamp);
+  const Converted c = convert(scene);
+  ASSERT_EQ(c.error, "");
+  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  ASSERT_TRUE(result.converged);
+  const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, c.frames, c.problem, result);
+  EXPECT_EQ(msg.header.stamp, kStamp);
+  ASSERT_EQ(msg.forces.size(), 4u);
+  const std::vector<int> offsets = c.problem.rowOffsets();
+  for (std::size_t i = 0; i < 4; ++i) {
+    const lcs::ContactForce& f = msg.forces[i];
+    const ContactFrame& frame = c.frames[i];
+    ASSERT_EQ(f.lambda.size(), static_cast<std::size_t>(c.problem.contacts[i].rows));
+    for (std::size_t k = 0; k < f.lambda.size(); ++k) EXPECT_EQ(f.lambda[k], result.forces[offsets[i] + k]);
+    EXPECT_EQ(f.state, static_cast<std::uint8_t>(result.states[i]));
+    const Eigen::Vector3d expected =
+        f.normal_force * frame.normal + f.tangent1_force * frame.tangent1 + f.tangent2_force * frame.tangent2;
+    EXPECT_NEAR((toEigen(f.force) - expected).norm(), 0.0, 1e-15);
+    EXPECT_NEAR((toEigen(f.tangent1) - frame.tangent1).norm(), 0.0, 1e-15);  // derived ones published back
+  }
+  EXPECT_EQ(msg.forces[2].tangent1_force, 0.0);  // frictionless
+  EXPECT_EQ(msg.forces[3].tangent1_force, msg.forces[3].lambda[1]);  // bilateral second row along t1
+  EXPECT_TRUE(allFinite(msg));
+}
+
+TEST(SumBodyPairWrenches, SumsForceAndTorquePerPair) {
+  const Scene scene = makeScene(10, kStamp);
+  const Converted c = convert(scene);
+  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, c.frames, c.problem, result);
+  ASSERT_EQ(msg.wrenches.size(), 3u);  // (box, ground), (ball, box), (arm, box) in order
+  EXPECT_EQ(msg.wrenches[0].body_a, "box");
+  EXPECT_EQ(msg.wrenches[0].body_b, "ground");
+  EXPECT_EQ(msg.wrenches[2].body_a, "arm");
+  const Eigen::Vector3d f0 = toEigen(msg.forces[0].force), f1 = toEigen(msg.forces[1].force);
+  EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.force) - (f0 + f1)).norm(), 0.0, 1e-15);
+  const Eigen::Vector3d torque =
+      toEigen(msg.forces[0].position).cross(f0) + toEigen(msg.forces[1].position).cross(f1);
+  EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.torque) - torque).norm(), 0.0, 1e-15);
+}
+
+TEST(StatsMsg, CarriesTheResult) {
+  const Scene scene = makeScene(10, kStamp);
+  const Converted c = convert(scene);
+  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  const lcs::SolverStats stats = toStatsMsg(scene.contacts.header, c.problem, result);
+  EXPECT_TRUE(stats.success);
+  EXPECT_EQ(stats.status, "converged");
+  EXPECT_EQ(stats.status_code, lcs::SolverStats::CONVERGED);
+  EXPECT_EQ(stats.solver, "nlgs");
+  EXPECT_EQ(stats.iterations, result.iterations);
+  EXPECT_EQ(stats.residual, result.residual);
+  EXPECT_EQ(stats.num_contacts, 4);
+  EXPECT_EQ(stats.num_rows, 9);
+  EXPECT_TRUE(allFinite(stats));
+
+  const lcs::SolverStats rejected =
+      rejectedStatsMsg(scene.contacts.header, lcs::SolverStats::NO_COMPLIANCE, "nothing came");
+  EXPECT_FALSE(rejected.success);
+  EXPECT_EQ(rejected.status, "no_compliance");
+  EXPECT_EQ(statusCodeName(lcs::SolverStats::INVALID_INPUT), "invalid_input");
+  EXPECT_EQ(statusCodeName(lcs::SolverStats::MAX_ITERATIONS), "max_iterations");
+}
+
+TEST(AllFinite, CatchesANonFiniteForce) {
+  lcs::ConstraintForces msg;
+  msg.forces.resize(1);
+  EXPECT_TRUE(allFinite(msg));
+  msg.forces[0].lambda = {1.0, kNaN};
+  EXPECT_FALSE(allFinite(msg));
+}
+
+// ---- parameters -----------------------------------------------------------------------
+
+TEST(SolverParamsRos, DefaultsAreSofas) {
+  const NodeSettings s;
+  EXPECT_EQ(s.solver.tolerance, 0.001);
+  EXPECT_EQ(s.solver.maxIt, 1000);
+  EXPECT_EQ(s.solver.mu, 0.6);
+  EXPECT_TRUE(s.solver.initial_guess);
+  EXPECT_TRUE(s.solver.build_lcp);
+  EXPECT_EQ(s.solver.regularizationTerm, 0.0);
+  EXPECT_EQ(s.solver.minW, 0.0);
+  EXPECT_EQ(s.solver.maxF, 0.0);
+  EXPECT_FALSE(s.solver.computeConstraintForces);
+  EXPECT_FALSE(s.solver.displayDebug);
+  EXPECT_EQ(s.display.showCellWidth, 0.0);
+  EXPECT_EQ(s.solver.max_rows, 30000);
+  EXPECT_EQ(validateSettings(s), "");
+}
+
+TEST(SolverParamsRos, OverridesParseAndNameTheirFaults) {
+  lcs::SolverParams p = defaultSolverParams();
+  EXPECT_EQ(applyOverride("maxIt=50", &p), "");
+  EXPECT_EQ(p.maxIt, 50);
+  EXPECT_EQ(applyOverride("mu=0.25", &p), "");
+  EXPECT_EQ(p.mu, 0.25);
+  EXPECT_EQ(applyOverride("solver=lemke", &p), "");
+  EXPECT_EQ(p.solver, lcs::SolverKind::kLemke);
+  EXPECT_EQ(applyOverride("build_lcp=false", &p), "");
+  EXPECT_FALSE(p.build_lcp);
+  EXPECT_NE(applyOverride("maxIt=abc", &p).find("maxIt"), std::string::npos);
+  EXPECT_NE(applyOverride("maxIt=5.5", &p).find("an integer"), std::string::npos);
+  EXPECT_NE(applyOverride("speed=3", &p).find("'speed' is not a solver parameter"), std::string::npos);
+  EXPECT_NE(applyOverride("tolerance", &p).find("name=value"), std::string::npos);
+  EXPECT_NE(applyOverride("solver=fast", &p).find("one of auto, pgs, nlgs, lemke"), std::string::npos);
+  EXPECT_EQ(p.maxIt, 50);  // failed overrides change nothing
+}
+
+TEST(SolverParamsRos, ConfigRoundTripAndRejection) {
+  NodeSettings s;
+  s.solver.maxIt = 77;
+  s.solver.solver = lcs::SolverKind::kPgs;
+  s.display.showTranslation = {{1.0, 2.0, 3.0}};
+  s.pairing_window = 0.7;  // startup-only: kept by fromConfig
+  lcp_contact_solver::ContactSolverConfig config = toConfig(s);
+  EXPECT_EQ(config.maxIt, 77);
+  EXPECT_EQ(config.solver, "pgs");
+  EXPECT_EQ(config.showTranslation_y, 2.0);
+  config.mu = 0.1;
+  NodeSettings t;
+  t.pairing_window = 0.7;
+  ASSERT_EQ(fromConfig(config, &t), "");
+  EXPECT_EQ(t.solver.maxIt, 77);
+  EXPECT_EQ(t.solver.mu, 0.1);
+  EXPECT_EQ(t.display.showTranslation[2], 3.0);
+  EXPECT_EQ(t.pairing_window, 0.7);
+
+  config.tolerance = -1.0;
+  EXPECT_NE(fromConfig(config, &t).find("tolerance"), std::string::npos);
+  EXPECT_EQ(t.solver.tolerance, 0.001);  // unchanged
+  config.tolerance = 0.01;
+  config.solver = "fast";
+  EXPECT_NE(fromConfig(config, &t).find("solver"), std::string::npos);
+  config.solver = "auto";
+  config.force_arrow_scale = 0.0;
+  EXPECT_NE(fromConfig(config, &t).find("force_arrow_scale"), std::string::npos);
+}
+
+// ---- markers --------------------------------------------------------------------------
+
+class Markers : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scene_ = makeScene(10, kStamp);
+    c_ = convert(scene_);
+    ASSERT_EQ(c_.error, "");
+    result_ = lcs::solveProblem(c_.problem, defaultSolverParams());
+    mu_ = lcs::effectiveMu(c_.problem, 0.6);
+  }
+
+  std::set<std::string> namespaces(const visualization_msgs::MarkerArray& markers) const {
+    std::set<std::string> ns;
+    for (const auto& m : markers.markers) ns.insert(m.ns);
+    return ns;
+  }
+
+  const visualization_msgs::Marker* find(const visualization_msgs::MarkerArray& markers, const std::string& ns) const {
+    for (const auto& m : markers.markers)
+      if (m.ns == ns) return &m;
+    return nullptr;
+  }
+
+  Scene scene_;
+  Converted c_;
+  lcs::SolveResult result_;
+  std::vector<double> mu_;
+};
+
+TEST_F(Markers, BuiltOnlyWithSubscribers) {
+  EXPECT_FALSE(shouldBuildMarkers(0));
+  EXPECT_TRUE(shouldBuildMarkers(1));
+}
+
+TEST_F(Markers, StableNamespacesAndNoHeatmapByDefault) {
+  const DisplayOptions options;  // showCellWidth 0: SOFA's default, no heat map
+  const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, options);
+  EXPECT_EQ(namespaces(markers), (std::set<std::string>{kNsContactPoints, kNsNormals, kNsForces, kNsFrictionCones}));
+  for (const auto& m : markers.markers) {
+    EXPECT_EQ(m.header.frame_id, "world");
+    EXPECT_EQ(m.lifetime.toSec(), 0.5);
+    if (m.ns != kNsForces) {
+      EXPECT_EQ(m.id, 0);
+    }
+  }
+  const auto* points = find(markers, kNsContactPoints);
+  ASSERT_NE(points, nullptr);
+  ASSERT_EQ(points->points.size(), 4u);
+  EXPECT_EQ(points->colors[0], stateColor(result_.states[0]));
+  // Two frictional contacts with μ > 0, 12 triangles each.
+  EXPECT_EQ(find(markers, kNsFrictionCones)->points.size(), 2u * 12u * 3u);
+}
+
+TEST_F(Markers, ForceArrowsScaleWithTheParameter) {
+  DisplayOptions options;
+  options.force_arrow_scale = 0.5;
+  const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, options);
+  const lcs::ConstraintForces forces = toConstraintForcesMsg(scene_.contacts, c_.frames, c_.problem, result_);
+  for (const auto& m : markers.markers) {
+    if (m.ns != kNsForces) continue;
+    ASSERT_EQ(m.points.size(), 2u);
+    const Eigen::Vector3d arrow = toEigen(m.points[1]) - toEigen(m.points[0]);
+    EXPECT_NEAR((arrow - 0.5 * toEigen(forces.forces[m.id].force)).norm(), 0.0, 1e-12);
+  }
+}
+
+TEST_F(Markers, HeatmapsAtShowTranslationWithCellWidth) {
+  DisplayOptions options;
+  options.showCellWidth = 0.1;
+  options.showTranslation = {{1.0, 2.0, 3.0}};
+  options.heatmap_max_rows = 5;
+  const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, options);
+  const auto* w = find(markers, kNsComplianceHeatmap);
+  const auto* lambda = find(markers, kNsLambdaHeatmap);
+  ASSERT_NE(w, nullptr);
+  ASSERT_NE(lambda, nullptr);
+  EXPECT_EQ(w->points.size(), 25u);  // the leading 5 x 5 rows only
+  EXPECT_EQ(lambda->points.size(), 5u);
+  EXPECT_NEAR((toEigen(w->points[0]) - Eigen::Vector3d(1.0, 2.0, 3.0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((toEigen(w->points[6]) - Eigen::Vector3d(1.1, 1.9, 3.0)).norm(), 0.0, 1e-12);  // row 1, col 1
+  EXPECT_NEAR((toEigen(lambda->points[0]) - Eigen::Vector3d(1.6, 2.0, 3.0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(w->scale.x, 0.095, 1e-12);
+
+  options.show_w_heatmap = false;
+  const auto hidden = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, options);
+  EXPECT_EQ(find(hidden, kNsComplianceHeatmap), nullptr);
+}
+
+TEST(HeatColor, DivergesAroundZero) {
+  EXPECT_EQ(heatColor(0.0, 1.0).g, 1.0f);  // white
+  EXPECT_EQ(heatColor(1.0, 1.0).r, 1.0f);
+  EXPECT_EQ(heatColor(1.0, 1.0).b, 0.0f);  // red
+  EXPECT_EQ(heatColor(-2.0, 1.0).b, 1.0f);
+  EXPECT_EQ(heatColor(-2.0, 1.0).r, 0.0f);  // clamped blue
+  EXPECT_EQ(heatColor(5.0, 0.0).g, 1.0f);  // no scale: white
+}
+
+// ---- pairing and debug summary --------------------------------------------------------
+
+TEST(PairingMonitor, ReportsOnlyArraysWaitingPastTheWindow) {
+  PairingMonitor monitor;
+  std_msgs::Header a, b;
+  a.stamp = ros::Time(1, 0);
+  b.stamp = ros::Time(2, 0);
+  monitor.expect(a, ros::Time(10, 0));
+  monitor.expect(b, ros::Time(10, 0));
+  monitor.paired(b.stamp);
+  EXPECT_TRUE(monitor.takeExpired(ros::Time(10, 400000000), 0.5).empty());
+  const auto expired = monitor.takeExpired(ros::Time(10, 600000000), 0.5);
+  ASSERT_EQ(expired.size(), 1u);
+  EXPECT_EQ(expired[0].stamp, a.stamp);
+  EXPECT_EQ(monitor.waiting(), 0u);
+}
+
+TEST(CycleLog, NamesTheWorstContact) {
+  const Scene scene = makeScene(10, kStamp);
+  const Converted c = convert(scene);
+  lcs::SolverParams params = defaultSolverParams();
+  params.maxIt = 1;  // far from converged: some contact has a clear error
+  const lcs::SolveResult result = lcs::solveProblem(c.problem, params);
+  const std::vector<double> mu = lcs::effectiveMu(c.problem, params.mu);
+  double worst_error = 0.0;
+  const int worst = worstContact(c.problem, result, mu, &worst_error);
+  ASSERT_GE(worst, 0);
+  // The per-contact errors add up (squared) to the core's unnormalised residual.
+  const double total = result.residual * c.problem.d_free.norm();
+  EXPECT_LE(worst_error, total + 1e-12);
+  EXPECT_GE(worst_error * std::sqrt(4.0), total - 1e-12);
+  const std::string line = cycleSummary(c.problem, result, mu);
+  EXPECT_NE(line.find("4 contacts, 9 rows (dense W)"), std::string::npos) << line;
+  EXPECT_NE(line.find("worst contact " + std::to_string(worst)), std::string::npos) << line;
+}
