@@ -1,0 +1,94 @@
+// Rigid-body contact mechanics of one step: Jacobians, the compliance W, the free-motion
+// violation d_free, and applying the solved forces.
+//
+// Units and formulation (position level, SOFA's convention, λ in newtons). For a step dt:
+//   v_free = v + dt M⁻¹ f_ext                       (gravity, external wrenches)
+//   W      = dt² J M⁻¹ Jᵀ                            (m/N)
+//   d_free = gapTerm(gap) + dt (J v_free)  normal row (m)
+//            dt (J v_free)                  tangent rows (m)
+//   λ      = the contact forces over the step (N), from d = W λ + d_free, 0 ≤ λ_n ⟂ d_n ≥ 0
+//   v_new  = v_free + dt M⁻¹ Jᵀ λ,  then x_new from v_new (semi-implicit Euler).
+// so d_n = gapTerm(gap) + dt (J v_new): the gap left after the step.
+//
+// J: one row per contact row (normal, t1, t2), two 6-dof blocks (body A, body B), each in
+// the body's [linear; angular] velocity coordinates (COM velocity, world angular velocity):
+//   J_A,u = [ uᵀ, ((p − c_A) × u)ᵀ ],   J_B,u = −[ uᵀ, ((p − c_B) × u)ᵀ ]
+// so J v is the velocity of A relative to B at the contact point along u. Static bodies
+// have no block (M⁻¹ = 0).
+#pragma once
+
+#include "lcp_contact_solver/core/problem.h"
+#include "lcp_contact_solver/scene/contact_generator.h"
+#include "lcp_contact_solver/scene/scene.h"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace lcp_contact_solver {
+namespace scene {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// The one place where the gap enters d_free: gap when gap > 0 (speculative contact: no
+// force unless the bodies would meet within the step), erp·gap when gap < 0 (penetration;
+// erp is the fraction removed per step).
+double gapTerm(double gap, double erp);
+
+// Free velocities [v; ω] of every body after dt under gravity and external wrenches
+// (zero for static bodies).
+std::vector<Vector6d> freeVelocities(const Scene& scene, double dt);
+
+// Jacobians of a set of contacts and the adjacency body → contacts; builds W and d_free and
+// maps forces back to body velocities. Cost O(contacts × neighbours).
+class RigidContactModel {
+ public:
+  RigidContactModel(const Scene& scene, const std::vector<ContactFrame>& frames);
+
+  int contactCount() const { return static_cast<int>(contacts_.size()); }
+  int rowCount() const { return offsets_.empty() ? 0 : offsets_.back(); }
+  const std::vector<int>& rowOffsets() const { return offsets_; }
+
+  // dt² J M⁻¹ Jᵀ; block-sparse holds one block per pair of contacts sharing a dynamic body
+  // (both (i, j) and (j, i)), columns ascending.
+  ComplianceMatrix compliance(double dt, ComplianceStorage storage) const;
+  // gapTerm + dt J v_free.
+  Eigen::VectorXd freeViolation(const std::vector<Vector6d>& v_free, double dt, double erp) const;
+  // v += dt M⁻¹ Jᵀ λ for every dynamic body (λ one entry per row).
+  void applyForces(const Eigen::VectorXd& lambda, double dt, std::vector<Vector6d>* velocities) const;
+  // Jᵀ λ per body: the contact wrench [force; torque about the COM] on each body (world).
+  std::vector<Vector6d> bodyWrenches(const Eigen::VectorXd& lambda) const;
+  // The full J (rows × 6·bodies), for tests.
+  Eigen::MatrixXd denseJacobian() const;
+  // The full M⁻¹ (6·bodies square), for tests.
+  Eigen::MatrixXd denseInverseMass() const;
+
+ private:
+  struct Side {
+    int body = -1;                        // -1: static (no block)
+    Eigen::Matrix<double, 3, 6> J;        // first `rows` rows used
+    Eigen::Matrix<double, 6, 3> MinvJt;   // M⁻¹ Jᵀ
+  };
+  struct ContactData {
+    int rows = 3;
+    double gap = 0.0;
+    Side side[2];
+  };
+
+  // Contacts sharing a dynamic body with contact i (i included), ascending.
+  std::vector<int> neighbours(int i) const;
+
+  int body_count_ = 0;
+  std::vector<ContactData> contacts_;
+  std::vector<int> offsets_;
+  std::vector<std::vector<int>> body_contacts_;  // dynamic body → contacts, ascending
+  std::vector<Eigen::Matrix<double, 6, 6>> inverse_mass_;  // per body (zero for static)
+};
+
+// Problem (contacts, W, d_free) of the given frames; frames.size() == contacts.
+Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
+                     const std::vector<Vector6d>& v_free, double dt, double erp,
+                     ComplianceStorage storage);
+
+}  // namespace scene
+}  // namespace lcp_contact_solver

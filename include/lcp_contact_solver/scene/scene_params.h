@@ -1,0 +1,119 @@
+// Parameters of a scene: the small YAML file beside each URDF under config/scenes/.
+//
+// Layer rule: the scene layer depends on the core only (no ROS headers). The YAML reader is
+// yaml-cpp (Debian libyaml-cpp-dev), used only in the .cpp files.
+//
+// Every key is optional; unknown keys are an error (a typo must not silently fall back to
+// a default). Units are SI. See config/scenes/README.md for an annotated example.
+#pragma once
+
+#include "lcp_contact_solver/core/solver_params.h"
+
+#include <Eigen/Core>
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lcp_contact_solver {
+namespace scene {
+
+// Every fault of a scene file (URDF or YAML) or of a scene's use. The message names the
+// file and the link, joint or key at fault.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// How the compliance W is stored in the problem handed to the solver.
+enum class ComplianceStorage {
+  kDense,        // "dense": Eigen::MatrixXd
+  kBlockSparse,  // "block_sparse": one block per pair of contacts sharing a dynamic body
+};
+const char* complianceStorageName(ComplianceStorage storage);
+bool parseComplianceStorage(const std::string& name, ComplianceStorage* storage);
+
+// Friction between two named bodies (order does not matter). μ = 0 makes the pair's
+// contacts frictionless one-row contacts.
+struct PairFriction {
+  std::string body_a, body_b;
+  double mu = 0.0;
+};
+
+// Replaces the origin of a URDF joint (fixed or floating) before the scene is built;
+// e.g. the incline angle: `joint_origins: {tilt: {rpy_deg: [0, 20, 0]}}`.
+struct JointOriginOverride {
+  bool has_xyz = false, has_rpy = false;
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();  // radians (YAML: `rpy` or `rpy_deg`)
+};
+
+// Initial velocity of a dynamic body: of its centre of mass, and its angular velocity,
+// both in the world frame.
+struct InitialVelocity {
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();   // m/s
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();  // rad/s
+};
+
+// An optional static ground: a body named "ground_plane" whose top face is the plane
+// z = height. It is a large thin box, not an FCL half-space, because FCL's box-box test
+// gives up to four contact points per face contact while its box-half-space test gives one
+// (a box resting on one point would rock).
+struct GroundPlane {
+  bool enabled = false;
+  double height = 0.0;       // m, z of the top face
+  double half_extent = 50.0; // m, half side length in x and y
+  double thickness = 1.0;    // m
+};
+
+struct SceneParams {
+  std::string description;
+  // Fixed time step of the simulator (s). SceneSimulator::step() uses it.
+  double dt = 0.01;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  // m/s²
+  // Position-error reduction: the fraction of a penetration removed per step (0..1].
+  // See gapTerm() in compliance.h: the one place where the gap enters d_free.
+  double erp = 0.2;
+  // Default friction coefficient of every body pair; `friction_pairs` overrides it.
+  double mu = 0.5;
+  std::vector<PairFriction> friction_pairs;
+  // Body pairs never tested (SRDF-style disable list): `disable_collisions: [[a, b], ...]`.
+  std::vector<std::pair<std::string, std::string>> disable_collisions;
+  // Speculative contact distance (m): shape pairs closer than this produce contacts; a
+  // contact with gap > 0 gets force only if the bodies would otherwise meet within the step.
+  // Should exceed the approach speed × dt (faster approaches penetrate once, then erp).
+  double contact_margin = 0.01;
+  // A new contact keeps the id of a previous-step contact of the same body pair whose
+  // point, in body A's frame, is closer than this (m). Greedy nearest-first, deterministic.
+  double id_match_tolerance = 0.01;
+  ComplianceStorage compliance = ComplianceStorage::kBlockSparse;
+  // Include the gyroscopic torque -ω×Iω in the free motion. Off by default: explicit
+  // treatment gains energy for spinning asymmetric bodies; resting scenes do not need it.
+  bool gyroscopic = false;
+  GroundPlane ground_plane;
+  std::map<std::string, JointOriginOverride> joint_origins;
+  std::map<std::string, InitialVelocity> initial_velocities;
+  // Solver settings of the in-process simulator (SceneSimulator). YAML `solver:` map with
+  // keys `name`, `tolerance`, `maxIt`, `regularizationTerm`. The ROS simulator node leaves
+  // solving to the solver node and ignores them.
+  SolverParams solver = defaultSceneSolverParams();
+  // Suggested simulated time for demos (s); 0 = not given.
+  double duration = 0.0;
+
+  static SolverParams defaultSceneSolverParams();
+  // Friction coefficient of the pair (overrides first, then `mu`).
+  double frictionFor(const std::string& a, const std::string& b) const;
+  bool collisionDisabled(const std::string& a, const std::string& b) const;
+};
+
+// Reads a scene YAML file. Throws SceneError naming the file and the key on any fault
+// (syntax, unknown key, wrong type, out-of-range value).
+SceneParams loadSceneParams(const std::string& yaml_path);
+// Same, from text; `source` names it in errors.
+SceneParams parseSceneParams(const std::string& yaml_text, const std::string& source = "<yaml>");
+// Empty string when the values are consistent, otherwise a sentence naming the field.
+std::string validateSceneParams(const SceneParams& params);
+
+}  // namespace scene
+}  // namespace lcp_contact_solver
