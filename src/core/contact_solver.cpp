@@ -3,6 +3,7 @@
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -24,7 +25,8 @@ double SolveContext::residual(const Eigen::VectorXd& lambda) const {
 
 bool SolveContext::hasFriction() const {
   for (std::size_t i = 0; i < problem->contacts.size(); ++i)
-    if (!ignored[i] && problem->contacts[i].type == ContactType::kFrictional && mu[i] > 0.0) return true;
+    if ((ignored.empty() || !ignored[i]) && problem->contacts[i].type == ContactType::kFrictional && mu[i] > 0.0)
+      return true;
   return false;
 }
 
@@ -34,15 +36,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+bool pyramidModel(const SolverParams& params) {
+  return params.friction_model != FrictionModel::kCoulombDisc;
+}
+
+// auto: the disc needs nlgs; a pyramid makes friction an LCP, solved by (boxed) pgs.
 SolverKind resolveKind(SolverKind kind, const SolveContext& ctx) {
   if (kind != SolverKind::kAuto) return kind;
-  return ctx.hasFriction() ? SolverKind::kNlgs : SolverKind::kPgs;
+  return ctx.hasFriction() && !pyramidModel(*ctx.params) ? SolverKind::kNlgs : SolverKind::kPgs;
 }
 
 KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const bool pyramid = pyramidModel(*ctx.params) && ctx.hasFriction();
   switch (kind) {
-    case SolverKind::kPgs: return runProjectedGaussSeidel(ctx, lambda);
-    case SolverKind::kLemke: return runLemke(ctx, lambda);
+    case SolverKind::kPgs:
+      return pyramid ? runBoxedGaussSeidel(ctx, lambda) : runProjectedGaussSeidel(ctx, lambda);
+    case SolverKind::kLemke: return pyramid ? runPyramidLemke(ctx, lambda) : runLemke(ctx, lambda);
+    case SolverKind::kApgd: return runApgd(ctx, lambda);
+    case SolverKind::kNewton: return runNewton(ctx, lambda);
     case SolverKind::kNlgs:
     case SolverKind::kAuto: break;
   }
@@ -89,8 +100,11 @@ int dropContactsAboveMaxF(SolveContext& ctx, const Eigen::VectorXd& lambda, doub
   return dropped;
 }
 
+// The kernel could not run, or ended on something that is not an approximate solution:
+// its forces must not drive maxF drops nor seed the next warm start.
 bool failedToRun(SolveStatus status) {
-  return status == SolveStatus::kZeroDiagonal || status == SolveStatus::kNotApplicable;
+  return status == SolveStatus::kZeroDiagonal || status == SolveStatus::kNotApplicable ||
+         status == SolveStatus::kRayTermination || status == SolveStatus::kNumericalFailure;
 }
 
 }  // namespace
@@ -143,6 +157,11 @@ SolveResult ContactSolver::solve(const Problem& problem) {
   ctx.mu = effectiveMu(problem, params_.mu);
   ctx.regularization = params_.regularizationTerm;
   ctx.ignored = contactsBelowMinW(problem, ctx.offsets, params_.minW, ctx.regularization);
+  if (params_.time_budget > 0.0) {
+    ctx.has_deadline = true;
+    ctx.deadline = start + std::chrono::duration_cast<Clock::duration>(
+                               std::chrono::duration<double>(std::min(params_.time_budget, 1e7)));
+  }
 
   const SolverKind kind = resolveKind(params_.solver, ctx);
   result.solver = solverName(kind);
@@ -159,7 +178,8 @@ SolveResult ContactSolver::solve(const Problem& problem) {
     report.solver_error = pass.solver_error;
     report.iterations += pass.iterations;
     report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
-    if (failedToRun(pass.status) || params_.maxF <= 0.0) break;
+    report.friction_model = pass.friction_model;
+    if (failedToRun(pass.status) || pass.status == SolveStatus::kTimeBudget || params_.maxF <= 0.0) break;
     if (dropContactsAboveMaxF(ctx, lambda, params_.maxF) == 0) break;
     ++result.resolves;
   }
@@ -185,6 +205,13 @@ SolveResult ContactSolver::solve(const Problem& problem) {
   result.iterations = report.iterations;
   result.solver_error = std::isfinite(report.solver_error) ? report.solver_error : 0.0;
   result.message = report.message;
+  result.friction_model = report.friction_model;
+  if (pyramidModel(params_) && report.friction_model == FrictionModel::kCoulombDisc && ctx.hasFriction() &&
+      !failedToRun(result.status)) {
+    result.message += std::string(result.message.empty() ? "" : "; ") + "friction_model " +
+                      frictionModelName(params_.friction_model) + " applies to pgs and lemke; " +
+                      result.solver + " solved the Coulomb disc";
+  }
   result.residual_history = std::move(report.history);
   if (!params_.build_lcp) {
     result.message += std::string(result.message.empty() ? "" : "; ") +
@@ -214,6 +241,7 @@ const char* statusName(SolveStatus status) {
     case SolveStatus::kRayTermination: return "ray_termination";
     case SolveStatus::kNumericalFailure: return "numerical_failure";
     case SolveStatus::kInvalidInput: return "invalid_input";
+    case SolveStatus::kTimeBudget: return "time_budget";
   }
   return "unknown";
 }

@@ -1,6 +1,32 @@
 // Gauss-Seidel kernels: projected Gauss-Seidel (PGS, SOFA's gaussSeidelLCP1) for
-// frictionless problems and nonlinear block Gauss-Seidel (NLGS, SOFA's nlcp_gaussseidel)
-// for Coulomb friction. Both run the same sweep; each contact type has its local step.
+// frictionless problems, nonlinear block Gauss-Seidel (NLGS, SOFA's nlcp_gaussseidel)
+// for Coulomb friction, and the boxed PGS for a pyramid friction model. All run the same
+// sweep; each contact type has its local step.
+//
+// Derivation (one sweep). With the other contacts frozen, contact c sees
+//   u_c = D_c λ_c + b_c,   D_c = W_cc (+ r I),   b_c = d_c - D_c λ_c   (d_c its current d)
+// and solves its own small problem exactly: a scalar LCP for a normal row
+// (λ = max(0, λ - d / D_nn)), a linear solve for bilateral rows (λ -= D⁻¹ d), the local
+// Coulomb problem for a frictional contact (coulombLocalStep), or the local polygon
+// problem for a pyramid (polygonLocalStep). Then d is updated with W's columns of c
+// (dense) or re-read from c's block row (block-sparse) before the next contact. A fixed
+// point of the sweep satisfies every contact's law with every other contact's force, so
+// it solves the problem.
+//
+// Over-relaxation (SolverParams::sor = ω): the local answer λ_c* is not taken as is but
+// λ_c <- Proj_c(λ_c + ω (λ_c* - λ_c)), Proj_c the projection onto the contact's feasible
+// set (R+ for a normal, the cone for Coulomb, the polygon pyramid, nothing for bilateral),
+// so the iterate stays admissible. Fixed points are unchanged (λ_c* = λ_c there). For the
+// frictionless LCP with symmetric positive definite W this is PSOR, convergent for
+// 0 < ω < 2; ω > 1 often saves sweeps on stiff stacks, ω < 1 damps oscillating
+// frictional problems. ω = 1 runs the plain step (bit-identical).
+//
+// When to use it: pgs for frictionless problems (and boxed pgs for pyramid friction) of
+// any size, nlgs for Coulomb friction at moderate accuracy (1e-3..1e-8): cheap sweeps,
+// robust on rank-deficient W, but linear convergence that stalls near 1e-5..1e-6 on
+// ill-conditioned stacks (use newton there).
+#include "friction_pyramid.h"
+
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
@@ -21,7 +47,7 @@ constexpr double kLocalTolerance = 1e-14;
 // Maintained d drifts by round-off; refresh it exactly this often (sweeps).
 constexpr int kRefreshInterval = 50;
 
-enum class LocalKind : std::uint8_t { kSkip, kNormalOnly, kCoulomb, kBilateral };
+enum class LocalKind : std::uint8_t { kSkip, kNormalOnly, kCoulomb, kBilateral, kPolygon };
 
 // What a contact's local step needs, computed once per solve. Stored flat, one per contact.
 struct LocalBlock {
@@ -36,6 +62,11 @@ struct LocalBlock {
   Eigen::Vector2d tangent_eigen = Eigen::Vector2d::Zero();
   bool tangent_symmetric = true;
   double tangent_step = 0.0;    // 1 / largest eigenvalue, for the non-symmetric fallback
+  // D_nt or D_tn nonzero: the normal and tangential local steps must be alternated.
+  bool coupled = true;
+  // D⁻¹ when D is well conditioned, for the one-shot sticking solution.
+  bool invertible = false;
+  Eigen::Matrix3d D_inverse = Eigen::Matrix3d::Zero();
   Eigen::MatrixXd bilateral_block;    // D, bilateral only
   Eigen::MatrixXd bilateral_inverse;  // D⁻¹, bilateral only
 };
@@ -43,38 +74,47 @@ struct LocalBlock {
 // Minimises ½ xᵀT x + bᵀx over the disc |x| <= radius, T = Q diag(a) Qᵀ symmetric.
 // KKT: (T + νI) x = -b, ν >= 0, ν(|x| - radius) = 0, so the minimiser's velocity
 // u_t = T x + b = -ν x opposes the force: exactly Coulomb's sliding law.
-// On the boundary ν solves the secular equation |x(ν)| = radius, monotone in ν, found by
-// safeguarded Newton on 1/|x(ν)| - 1/radius (close to linear in ν).
+// On the boundary ν solves the secular equation |x(ν)| = radius with g = Qᵀ b and
+// |x(ν)|² = Σ g_i² / (a_i + ν)². Since a_min <= a_i <= a_max, the root lies in
+//   [|g|/radius - a_max, |g|/radius - a_min]
+// (equal ends for an isotropic block: ν = |g|/radius - a, no iteration). h(ν) = 1/|x(ν)|
+// is increasing and concave there (Moré & Sorensen), so Newton on h(ν) = 1/radius started
+// at the left end climbs monotonically and quadratically to the root; a bisection
+// safeguard covers the indefinite case. h'(ν) = Σ g_i²/(a_i+ν)³ / |x|³ uses products,
+// not pow.
 Eigen::Vector2d solveDiscProblem(const LocalBlock& blk, const Eigen::Vector2d& b, double radius) {
   if (radius <= 0.0) return Eigen::Vector2d::Zero();
   const Eigen::Vector2d g = blk.tangent_basis.transpose() * b;
   const Eigen::Vector2d& a = blk.tangent_eigen;
   const double a_min = std::min(a[0], a[1]);
+  const double a_max = std::max(a[0], a[1]);
   if (a_min > 0.0) {
     const Eigen::Vector2d interior(-g[0] / a[0], -g[1] / a[1]);
     if (interior.norm() <= radius) return blk.tangent_basis * interior;
   }
-  const double g_norm = g.norm();
+  const double g_norm = std::sqrt(g[0] * g[0] + g[1] * g[1]);
   if (g_norm == 0.0) return Eigen::Vector2d::Zero();  // no preferred direction, no drive
-  auto xNorm = [&](double nu) { return std::hypot(g[0] / (a[0] + nu), g[1] / (a[1] + nu)); };
-  double lo = std::max(0.0, -a_min);  // |x(ν)| decreases on (lo, ∞)
-  double hi = lo + g_norm / radius + std::abs(a_min) + 1e-300;  // |x(hi)| <= radius
-  while (xNorm(hi) > radius && hi < 1e300) hi *= 2.0;
-  double nu = hi;
+  const double shift = g_norm / radius;
+  double lo = std::max(std::max(0.0, -a_min), shift - a_max);  // |x(lo)| >= radius
+  double hi = std::max(lo, shift - a_min);                      // |x(hi)| <= radius
+  double nu = a_min + lo > 0.0 ? lo : 0.5 * (lo + hi);  // a pole at lo: start inside
+  double e0 = 1.0 / (a[0] + nu), e1 = 1.0 / (a[1] + nu);
   for (int it = 0; it < 60; ++it) {
-    const double n = xNorm(nu);
+    const double x0 = g[0] * e0, x1 = g[1] * e1;
+    const double n2 = x0 * x0 + x1 * x1;
+    const double n = std::sqrt(n2);
     const double phi = 1.0 / n - 1.0 / radius;
     if (std::abs(phi) * radius < 1e-15) break;
     if (phi > 0.0) hi = nu; else lo = nu;  // phi increases with ν
-    // d|x|/dν = -Σ g²/(a+ν)³ / |x|;  d(1/|x|)/dν = Σ g²/(a+ν)³ / |x|³
-    const double c0 = g[0] * g[0] / std::pow(a[0] + nu, 3), c1 = g[1] * g[1] / std::pow(a[1] + nu, 3);
-    const double slope = (c0 + c1) / (n * n * n);
+    const double slope = (x0 * x0 * e0 + x1 * x1 * e1) / (n2 * n);
     double next = nu - phi / slope;
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     if (next == nu) break;
     nu = next;
+    e0 = 1.0 / (a[0] + nu);
+    e1 = 1.0 / (a[1] + nu);
   }
-  const Eigen::Vector2d x(-g[0] / (a[0] + nu), -g[1] / (a[1] + nu));
+  const Eigen::Vector2d x(-g[0] * e0, -g[1] * e1);
   // Round-off can leave |x| a hair outside; the cone constraint is the hard one.
   const double n = x.norm();
   return blk.tangent_basis * (n > radius ? Eigen::Vector2d(x * (radius / n)) : x);
@@ -86,33 +126,92 @@ Eigen::Vector2d clampToDisc(const Eigen::Vector2d& t, double radius) {
   return n > radius ? Eigen::Vector2d(t * (radius / n)) : t;
 }
 
+// Tangential part of the local Coulomb step: λ_n fixed, u_t = T λ_t + bt.
+void coulombTangentStep(const LocalBlock& blk, const Eigen::Vector2d& bt, Eigen::Vector3d& lambda) {
+  const double radius = blk.mu * lambda[0];
+  if (blk.tangent_symmetric) {
+    lambda.tail<2>() = solveDiscProblem(blk, bt, radius);
+  } else {
+    // Non-symmetric tangential block: projected gradient step; its fixed point still
+    // has u_t opposing λ_t.
+    const Eigen::Vector2d ut = blk.D.block<2, 2>(1, 1) * lambda.tail<2>() + bt;
+    lambda.tail<2>() = clampToDisc(lambda.tail<2>() - blk.tangent_step * ut, radius);
+  }
+}
+
 // Local Coulomb problem of one contact, with the others frozen: u = D λ + b.
 // Alternates the exact normal step λ_n = max(0, λ_n - u_n / D_nn) with the exact
 // tangential step (disc problem above) until the local iterate stops moving; the fixed
 // point satisfies 0 <= λ_n ⟂ u_n >= 0 and the Coulomb law, so the sweep is a true NSGS.
+// Three shortcuts reach the same solution with less work: a contact at rest (λ = 0) with
+// b_n >= 0 stays open (the normal step keeps λ_n = 0, so the disc has radius 0); a
+// sticking contact has u = 0, so λ = -D⁻¹ b, accepted when it lies inside the cone
+// (λ_n > 0, |λ_t| <= μ λ_n) — the alternation converges linearly to that same point, often
+// in 10+ rounds when D couples normal and tangents (symmetric tangential blocks only: the
+// non-symmetric fallback below stops after kMaxLocalIterations rounds, short of that
+// point, and its results are kept as they were); and without normal-tangential coupling
+// (D_nt = D_tn = 0) λ_n = max(0, -b_n / D_nn) is exact at once and one disc problem
+// finishes the step.
 void coulombLocalStep(const LocalBlock& blk, const Eigen::Vector3d& b, Eigen::Vector3d& lambda) {
+  if (b[0] >= 0.0 && lambda[0] == 0.0 && lambda[1] == 0.0 && lambda[2] == 0.0) return;
+  if (blk.invertible && blk.tangent_symmetric) {
+    const Eigen::Vector3d stick = -(blk.D_inverse * b);
+    const double radius = blk.mu * stick[0];
+    if (stick[0] > 0.0 && stick[1] * stick[1] + stick[2] * stick[2] <= radius * radius) {
+      lambda = stick;
+      return;
+    }
+  }
+  if (!blk.coupled && blk.tangent_symmetric) {
+    lambda[0] = std::max(0.0, -b[0] * blk.inv_nn);
+    coulombTangentStep(blk, b.tail<2>(), lambda);
+    return;
+  }
   for (int it = 0; it < kMaxLocalIterations; ++it) {
     const Eigen::Vector3d before = lambda;
     const double un = blk.D.row(0).dot(lambda) + b[0];
     lambda[0] = std::max(0.0, lambda[0] - un * blk.inv_nn);
     // Tangential problem with λ_n fixed: b_t' = b_t + D_tn λ_n.
     const Eigen::Vector2d bt = b.tail<2>() + blk.D.block<2, 1>(1, 0) * lambda[0];
-    const double radius = blk.mu * lambda[0];
-    if (blk.tangent_symmetric) {
-      lambda.tail<2>() = solveDiscProblem(blk, bt, radius);
-    } else {
-      // Non-symmetric tangential block: projected gradient step; its fixed point still
-      // has u_t opposing λ_t.
-      const Eigen::Vector2d ut = blk.D.block<2, 2>(1, 1) * lambda.tail<2>() + bt;
-      lambda.tail<2>() = clampToDisc(lambda.tail<2>() - blk.tangent_step * ut, radius);
-    }
+    coulombTangentStep(blk, bt, lambda);
     if ((lambda - before).norm() <= kLocalTolerance * (lambda.norm() + 1e-300)) break;
   }
 }
 
+// Local step of the boxed PGS (pyramid friction): one exact normal step with the current
+// tangential force, then the tangential force minimising ½ xᵀ D_tt x + b_tᵀ x over the
+// polygon P(μ λ_n) with the new λ_n (friction_pyramid.h). Its fixed point satisfies
+// 0 <= λ_n ⟂ u_n >= 0 and maximum dissipation over the polygon: the pyramid law. For the
+// box (pyramid4) with an uncoupled diagonal D_tt this is the classical clamp
+// λ_ti = clamp(λ_ti - u_ti / D_ti, -μ λ_n, μ λ_n) of boxed PGS.
+void polygonLocalStep(const LocalBlock& blk, const FrictionPolygon& polygon, const double* d_c,
+                      double omega, double* lambda_c) {
+  const double old_n = lambda_c[0];
+  double next_n = std::max(0.0, old_n - d_c[0] * blk.inv_nn);
+  if (omega != 1.0) next_n = std::max(0.0, old_n + omega * (next_n - old_n));
+  const Eigen::Vector2d old_t(lambda_c[1], lambda_c[2]);
+  // u_t(x) = D_tt x + bt with the normal force already moved.
+  const Eigen::Vector2d bt = Eigen::Vector2d(d_c[1], d_c[2]) - blk.D.block<2, 2>(1, 1) * old_t +
+                             blk.D.block<2, 1>(1, 0) * (next_n - old_n);
+  const double radius = blk.mu * next_n;
+  Eigen::Vector2d next_t;
+  if (blk.tangent_symmetric) {
+    next_t = minimizeOverPolygon(polygon, blk.D.block<2, 2>(1, 1), bt, radius);
+  } else {
+    const Eigen::Vector2d ut = blk.D.block<2, 2>(1, 1) * old_t + bt;
+    next_t = projectOntoPolygon(polygon, old_t - blk.tangent_step * ut, radius);
+  }
+  if (omega != 1.0) next_t = projectOntoPolygon(polygon, old_t + omega * (next_t - old_t), radius);
+  lambda_c[0] = next_n;
+  lambda_c[1] = next_t[0];
+  lambda_c[2] = next_t[1];
+}
+
 // Builds the per-contact local data; returns a failure message for a diagonal that the
 // local step would divide by (SOFA divides anyway and returns NaN).
-std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& blocks) {
+// `polygon` (pyramid models) turns frictional contacts into polygon steps.
+std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& blocks,
+                          const FrictionPolygon* polygon = nullptr) {
   const Problem& problem = *ctx.problem;
   const double r = ctx.regularization;
   blocks.resize(problem.contacts.size());
@@ -144,8 +243,19 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.kind = LocalKind::kNormalOnly;
       continue;
     }
-    blk.kind = LocalKind::kCoulomb;
+    blk.kind = polygon != nullptr ? LocalKind::kPolygon : LocalKind::kCoulomb;
     blk.D = D;
+    blk.coupled = D(0, 1) != 0.0 || D(0, 2) != 0.0 || D(1, 0) != 0.0 || D(2, 0) != 0.0;
+    {
+      const Eigen::Matrix3d D3 = D;
+      Eigen::FullPivLU<Eigen::Matrix3d> lu(D3);
+      // Only a well-conditioned block: the one-shot solution must be as accurate as the
+      // iteration it replaces.
+      const double cond_floor = 1e-10;
+      const Eigen::Vector3d pivots = lu.matrixLU().diagonal().cwiseAbs();
+      blk.invertible = lu.isInvertible() && pivots.minCoeff() > cond_floor * pivots.maxCoeff();
+      if (blk.invertible) blk.D_inverse = lu.inverse();
+    }
     const Eigen::Matrix2d T = D.block<2, 2>(1, 1);
     const double scale = T.cwiseAbs().maxCoeff();
     blk.tangent_symmetric = std::abs(T(0, 1) - T(1, 0)) <= 1e-12 * scale;
@@ -182,43 +292,75 @@ struct DenseAccess {
   const Eigen::VectorXd& currentD(const Eigen::VectorXd&) { return d; }
 };
 
+// Block-sparse W: d is maintained like the dense case, through the block columns. The
+// blocks of column j (block row i, values row-major rows_i × cols_j) are indexed once per
+// solve, so a contact's change updates d with one contiguous walk over its column and a
+// contact whose force does not move (an open contact staying open) costs nothing; d is
+// recomputed exactly every kRefreshInterval sweeps and before declaring convergence.
 struct SparseAccess {
   const BlockSparseMatrix& W;
   const SolveContext& ctx;
   Eigen::VectorXd d;
+  struct ColumnBlock {
+    int row0;        // first row of the block row
+    int rows;        // its height
+    const double* v; // the block's values
+  };
+  std::vector<int> column_start;           // per block column, into `column_blocks`
+  std::vector<ColumnBlock> column_blocks;  // blocks ordered by block column
 
-  void refresh(const Eigen::VectorXd&) {}
-  void contactD(const LocalBlock& blk, const Eigen::VectorXd& lambda, double* out) const {
-    const int i = static_cast<int>(&blk - first_block);
-    for (int k = 0; k < blk.rows; ++k)
-      out[k] = ctx.problem->d_free[blk.offset + k] + ctx.regularization * lambda[blk.offset + k];
-    for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s) {
-      const int j = W.block_col[s];
-      const int col0 = W.block_offset[j];
-      const int cols = W.block_offset[j + 1] - col0;
-      const double* v = W.values.data() + W.value_start[s];
-      for (int r = 0; r < blk.rows; ++r) {
-        double sum = 0.0;
-        for (int c = 0; c < cols; ++c) sum += v[r * cols + c] * lambda[col0 + c];
-        out[r] += sum;
+  SparseAccess(const BlockSparseMatrix& w, const SolveContext& context) : W(w), ctx(context) {
+    const int nb = W.blockCount();
+    column_start.assign(nb + 1, 0);
+    for (int j : W.block_col) ++column_start[j + 1];
+    for (int j = 0; j < nb; ++j) column_start[j + 1] += column_start[j];
+    column_blocks.resize(W.block_col.size());
+    std::vector<int> fill(column_start.begin(), column_start.end() - 1);
+    for (int i = 0; i < nb; ++i) {
+      for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s) {
+        const int j = W.block_col[s];
+        column_blocks[fill[j]++] = {W.block_offset[i], W.block_offset[i + 1] - W.block_offset[i],
+                                    W.values.data() + W.value_start[s]};
       }
     }
   }
-  void applyDelta(const LocalBlock&, const double*) {}
-  const Eigen::VectorXd& currentD(const Eigen::VectorXd& lambda) {
-    ctx.computeD(lambda, d);
-    return d;
+
+  void refresh(const Eigen::VectorXd& lambda) { ctx.computeD(lambda, d); }
+  void contactD(const LocalBlock& blk, const Eigen::VectorXd&, double* out) const {
+    for (int k = 0; k < blk.rows; ++k) out[k] = d[blk.offset + k];
   }
+  void applyDelta(const LocalBlock& blk, const double* delta) {
+    const int cols = blk.rows;
+    bool moved = false;
+    for (int k = 0; k < cols; ++k) moved = moved || delta[k] != 0.0;
+    if (!moved) return;
+    const int j = static_cast<int>(&blk - first_block);
+    double* dd = d.data();
+    for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
+      const ColumnBlock& b = column_blocks[s];
+      for (int r = 0; r < b.rows; ++r) {
+        double sum = 0.0;
+        for (int c = 0; c < cols; ++c) sum += b.v[r * cols + c] * delta[c];
+        dd[b.row0 + r] += sum;
+      }
+    }
+    if (ctx.regularization != 0.0)
+      for (int k = 0; k < cols; ++k) dd[blk.offset + k] += ctx.regularization * delta[k];
+  }
+  const Eigen::VectorXd& currentD(const Eigen::VectorXd&) { return d; }
   const LocalBlock* first_block = nullptr;
 };
 
-// One contact's local step on its current d; returns the change of λ_c in `delta`.
-void localStep(const LocalBlock& blk, const double* d_c, double* lambda_c, double* delta) {
+// One contact's local step on its current d with over-relaxation ω (see the top of the
+// file); returns the change of λ_c in `delta`.
+void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, double omega, const double* d_c,
+               double* lambda_c, double* delta) {
   switch (blk.kind) {
     case LocalKind::kSkip:
       break;
     case LocalKind::kNormalOnly: {
-      const double next = std::max(0.0, lambda_c[0] - d_c[0] * blk.inv_nn);
+      double next = std::max(0.0, lambda_c[0] - d_c[0] * blk.inv_nn);
+      if (omega != 1.0) next = std::max(0.0, lambda_c[0] + omega * (next - lambda_c[0]));
       delta[0] = next - lambda_c[0];
       lambda_c[0] = next;
       break;
@@ -229,17 +371,31 @@ void localStep(const LocalBlock& blk, const double* d_c, double* lambda_c, doubl
       const Eigen::Vector3d b = Eigen::Map<const Eigen::Vector3d>(d_c) - blk.D * old;
       Eigen::Vector3d next = old;
       coulombLocalStep(blk, b, next);
+      if (omega != 1.0) {
+        next = old + omega * (next - old);
+        projectOntoCone(blk.mu, next.data());
+      }
       Eigen::Map<Eigen::Vector3d> change(delta);
       change = next - old;
       lambda = next;
       break;
     }
+    case LocalKind::kPolygon: {
+      const Eigen::Vector3d old = Eigen::Map<const Eigen::Vector3d>(lambda_c);
+      polygonLocalStep(blk, *polygon, d_c, omega, lambda_c);
+      for (int k = 0; k < 3; ++k) delta[k] = lambda_c[k] - old[k];
+      break;
+    }
     case LocalKind::kBilateral: {
-      Eigen::Map<Eigen::VectorXd> lambda(lambda_c, blk.rows);
-      Eigen::Map<const Eigen::VectorXd> d(d_c, blk.rows);
-      Eigen::Map<Eigen::VectorXd> change(delta, blk.rows);
-      change = -blk.bilateral_inverse * d;
-      lambda += change;
+      // Plain loops: no dynamic-size temporaries (the sweep must not allocate).
+      const int n = blk.rows;
+      const Eigen::MatrixXd& inv = blk.bilateral_inverse;
+      for (int i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int k = 0; k < n; ++k) sum += inv(i, k) * d_c[k];
+        delta[i] = -omega * sum;
+      }
+      for (int i = 0; i < n; ++i) lambda_c[i] += delta[i];
       break;
     }
   }
@@ -249,9 +405,17 @@ void localStep(const LocalBlock& blk, const double* d_c, double* lambda_c, doubl
 double sofaContactError(const LocalBlock& blk, const double* delta) {
   switch (blk.kind) {
     case LocalKind::kNormalOnly: return std::abs(delta[0]) / blk.inv_nn;
-    case LocalKind::kCoulomb: return (blk.D * Eigen::Map<const Eigen::Vector3d>(delta)).norm();
-    case LocalKind::kBilateral:
-      return (blk.bilateral_block * Eigen::Map<const Eigen::VectorXd>(delta, blk.rows)).norm();
+    case LocalKind::kCoulomb:
+    case LocalKind::kPolygon: return (blk.D * Eigen::Map<const Eigen::Vector3d>(delta)).norm();
+    case LocalKind::kBilateral: {
+      double sum = 0.0;
+      for (int i = 0; i < blk.rows; ++i) {
+        double row = 0.0;
+        for (int k = 0; k < blk.rows; ++k) row += blk.bilateral_block(i, k) * delta[k];
+        sum += row * row;
+      }
+      return std::sqrt(sum);
+    }
     case LocalKind::kSkip: break;
   }
   return 0.0;
@@ -261,9 +425,17 @@ bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
 
 template <class Access>
 KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBlock>& blocks,
-                            Access& access, Eigen::VectorXd& lambda) {
+                            Access& access, Eigen::VectorXd& lambda,
+                            const FrictionPolygon* polygon) {
   const SolverParams& params = *ctx.params;
+  const double omega = params.sor;
+  // The problem solved: the disc's natural map, or the pyramid's (friction_pyramid.h).
+  auto residualOf = [&](const Eigen::VectorXd& l, const Eigen::VectorXd& d) {
+    return polygon != nullptr ? pyramidResidual(*ctx.problem, ctx.mu, *polygon, l, d, ctx.ignored)
+                              : naturalMapResidual(*ctx.problem, ctx.mu, l, d, ctx.ignored);
+  };
   KernelReport report;
+  if (polygon != nullptr) report.friction_model = params.friction_model;
   Eigen::VectorXd best = lambda;
   double best_residual = std::numeric_limits<double>::infinity();
   double delta[6];
@@ -275,7 +447,7 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
       if (blk.kind == LocalKind::kSkip) continue;
       access.contactD(blk, lambda, d_c);
       std::fill(delta, delta + blk.rows, 0.0);
-      localStep(blk, d_c, lambda.data() + blk.offset, delta);
+      localStep(blk, polygon, omega, d_c, lambda.data() + blk.offset, delta);
       access.applyDelta(blk, delta);
       if (params.stopping_rule == StoppingRule::kSofa) sofa_error += sofaContactError(blk, delta);
     }
@@ -292,7 +464,7 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
     double residual = 0.0;
     if (need_residual) {
       const Eigen::VectorXd& d = access.currentD(lambda);
-      residual = naturalMapResidual(*ctx.problem, ctx.mu, lambda, d, ctx.ignored);
+      residual = residualOf(lambda, d);
       if (params.displayDebug) report.history.push_back(residual);
       if (residual < best_residual) {
         best_residual = residual;
@@ -311,12 +483,22 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
       if (residual <= params.tolerance) {
         // Confirm on an exactly recomputed d: the maintained one carries round-off.
         access.refresh(lambda);
-        report.solver_error = ctx.residual(lambda);
+        Eigen::VectorXd d_exact;
+        ctx.computeD(lambda, d_exact);
+        report.solver_error = residualOf(lambda, d_exact);
         if (report.solver_error <= params.tolerance) {
           report.status = SolveStatus::kConverged;
           return report;
         }
       }
+    }
+    // At most one clock read per sweep.
+    if (sweep < params.maxIt && ctx.deadlinePassed()) {
+      lambda = best;
+      report.status = SolveStatus::kTimeBudget;
+      report.message = "time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
+                       std::to_string(sweep) + " sweeps; best iterate returned";
+      return report;
     }
   }
   lambda = best;
@@ -325,9 +507,10 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
   return report;
 }
 
-KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
+                            const FrictionPolygon* polygon = nullptr) {
   std::vector<LocalBlock> blocks;
-  if (std::string err = prepareBlocks(ctx, blocks); !err.empty()) {
+  if (std::string err = prepareBlocks(ctx, blocks, polygon); !err.empty()) {
     KernelReport report;
     report.status = SolveStatus::kZeroDiagonal;
     report.message = err;
@@ -335,11 +518,11 @@ KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W)) {
     DenseAccess access{*dense, ctx, Eigen::VectorXd()};
-    return sweepUntilDone(ctx, blocks, access, lambda);
+    return sweepUntilDone(ctx, blocks, access, lambda, polygon);
   }
-  SparseAccess access{std::get<BlockSparseMatrix>(ctx.problem->W), ctx, Eigen::VectorXd()};
+  SparseAccess access(std::get<BlockSparseMatrix>(ctx.problem->W), ctx);
   access.first_block = blocks.data();
-  return sweepUntilDone(ctx, blocks, access, lambda);
+  return sweepUntilDone(ctx, blocks, access, lambda, polygon);
 }
 
 }  // namespace
@@ -348,7 +531,8 @@ KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
   if (ctx.hasFriction()) {
     KernelReport report;
     report.status = SolveStatus::kNotApplicable;
-    report.message = "pgs solves frictionless problems; this one has contacts with mu > 0 (use nlgs)";
+    report.message = "pgs solves frictionless problems; this one has contacts with mu > 0 "
+                     "(use nlgs, or a pyramid friction_model for boxed pgs)";
     return report;
   }
   return runGaussSeidel(ctx, lambda);
@@ -356,6 +540,14 @@ KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
 
 KernelReport runNonlinearGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return runGaussSeidel(ctx, lambda);
+}
+
+KernelReport runBoxedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const FrictionPolygon polygon = makeFrictionPolygon(ctx.params->friction_model);
+  if (polygon.facets == 0) return runGaussSeidel(ctx, lambda);
+  KernelReport report = runGaussSeidel(ctx, lambda, &polygon);
+  report.friction_model = ctx.params->friction_model;
+  return report;
 }
 
 }  // namespace lcp_contact_solver

@@ -1,7 +1,9 @@
 #include "lcp_contact_solver/core/problem.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_set>
 
 namespace lcp_contact_solver {
 
@@ -51,11 +53,15 @@ std::string BlockSparseMatrix::validate() const {
     if (row_start[i + 1] < row_start[i]) return "block-sparse W: row starts decrease";
   }
   std::size_t expected_value = 0;
+  std::vector<int> last_row_seen(nb, -1);  // catches a block (i, j) stored twice
   for (int i = 0; i < nb; ++i) {
     const int ri = block_offset[i + 1] - block_offset[i];
     for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
       const int j = block_col[k];
       if (j < 0 || j >= nb) return "block-sparse W: block column " + std::to_string(j) + " out of range";
+      if (last_row_seen[j] == i)
+        return "block-sparse W: block (" + std::to_string(i) + ", " + std::to_string(j) + ") stored twice";
+      last_row_seen[j] = i;
       if (value_start[k] != static_cast<int>(expected_value)) return "block-sparse W: block values not contiguous";
       expected_value += static_cast<std::size_t>(ri) * (block_offset[j + 1] - block_offset[j]);
     }
@@ -130,7 +136,19 @@ Eigen::MatrixXd diagonalBlock(const ComplianceMatrix& W, int offset, int n) {
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return dense->block(offset, offset, n, n);
   const auto& sparse = std::get<BlockSparseMatrix>(W);
   Eigen::MatrixXd block = Eigen::MatrixXd::Zero(n, n);
-  // Find the block row containing `offset`; sum every stored piece that overlaps the window.
+  // Usual case: the window is exactly one contact's block; find its row by bisection.
+  const auto row = std::lower_bound(sparse.block_offset.begin(), sparse.block_offset.end(), offset);
+  if (row != sparse.block_offset.end() && *row == offset && row + 1 != sparse.block_offset.end() &&
+      *(row + 1) == offset + n) {
+    const int i = static_cast<int>(row - sparse.block_offset.begin());
+    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
+      if (sparse.block_col[k] != i) continue;
+      block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+          sparse.values.data() + sparse.value_start[k], n, n);
+    }
+    return block;
+  }
+  // Any other window: sum every stored piece that overlaps it.
   for (int i = 0; i < sparse.blockCount(); ++i) {
     const int r0 = sparse.block_offset[i], r1 = sparse.block_offset[i + 1];
     if (r1 <= offset || r0 >= offset + n) continue;
@@ -185,9 +203,11 @@ bool allFinite(const double* v, std::size_t n) {
 }
 
 std::string validateContacts(const Problem& problem) {
+  std::unordered_set<std::int64_t> ids;  // the warm start is keyed by id: ids must be unique
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const Contact& c = problem.contacts[i];
     const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
+    if (!ids.insert(c.id).second) return name + " repeats the id of an earlier contact";
     switch (c.type) {
       case ContactType::kFrictional:
         if (c.rows != 3) return name + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";

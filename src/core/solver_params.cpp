@@ -16,6 +16,19 @@ constexpr SolverEntry kSolvers[] = {
     {SolverKind::kPgs, "pgs"},
     {SolverKind::kNlgs, "nlgs"},
     {SolverKind::kLemke, "lemke"},
+    {SolverKind::kApgd, "apgd"},
+    {SolverKind::kNewton, "newton"},
+};
+
+struct FrictionModelEntry {
+  FrictionModel model;
+  const char* name;
+};
+
+constexpr FrictionModelEntry kFrictionModels[] = {
+    {FrictionModel::kCoulombDisc, "disc"},
+    {FrictionModel::kPyramid4, "pyramid4"},
+    {FrictionModel::kPyramid8, "pyramid8"},
 };
 
 }  // namespace
@@ -57,6 +70,28 @@ bool parseStoppingRule(const std::string& name, StoppingRule* rule) {
   return true;
 }
 
+const char* frictionModelName(FrictionModel model) {
+  for (const auto& entry : kFrictionModels)
+    if (entry.model == model) return entry.name;
+  return "unknown";
+}
+
+bool parseFrictionModel(const std::string& name, FrictionModel* model) {
+  for (const auto& entry : kFrictionModels) {
+    if (name == entry.name) {
+      *model = entry.model;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::vector<std::string> frictionModelNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : kFrictionModels) names.emplace_back(entry.name);
+  return names;
+}
+
 std::string validateParams(const SolverParams& p) {
   auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   if (!std::isfinite(p.tolerance) || p.tolerance <= 0.0) return "tolerance must be a finite number > 0";
@@ -66,6 +101,10 @@ std::string validateParams(const SolverParams& p) {
   if (!nonNegative(p.minW)) return "minW must be a finite number >= 0";
   if (!nonNegative(p.maxF)) return "maxF must be a finite number >= 0 (0 disables it)";
   if (p.max_rows < 0) return "max_rows must be >= 0 (0 disables the limit)";
+  if (!std::isfinite(p.sor) || p.sor <= 0.0 || p.sor >= 2.0) return "sor must be a number in (0, 2)";
+  if (!nonNegative(p.time_budget)) return "time_budget must be a finite number >= 0 (0 disables it)";
+  if (std::string(frictionModelName(p.friction_model)) == "unknown") return "friction_model is not a known model";
+  if (std::string(solverName(p.solver)) == "unknown") return "solver is not a known solver";
   return "";
 }
 

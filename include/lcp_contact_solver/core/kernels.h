@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,12 @@ struct SolveContext {
   std::vector<double> mu;     // effective μ per contact
   std::vector<bool> ignored;  // contacts left out (minW, maxF): force stays zero
   double regularization = 0.0;  // r added to W's diagonal
+  // End of the time budget (SolverParams::time_budget), if any. Kernels call
+  // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
+  // true, stop with their best iterate and SolveStatus::kTimeBudget.
+  bool has_deadline = false;
+  std::chrono::steady_clock::time_point deadline;
+  bool deadlinePassed() const { return has_deadline && std::chrono::steady_clock::now() >= deadline; }
 
   // Solver-independent residual of λ (computes d itself).
   double residual(const Eigen::VectorXd& lambda) const;
@@ -35,6 +42,7 @@ struct KernelReport {
   double solver_error = 0.0;  // the kernel's own stopping measure at exit
   std::string message;        // detail for failures
   std::vector<double> history;  // residual per iteration when params->displayDebug
+  FrictionModel friction_model = FrictionModel::kCoulombDisc;  // the law actually solved
 };
 
 // Each kernel starts from `lambda` (the warm start, rows of ignored contacts zero) and
@@ -42,5 +50,13 @@ struct KernelReport {
 KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runNonlinearGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
+// Accelerated projected gradient on the Coulomb disc (apgd.cpp).
+KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda);
+// Semismooth Newton on the Alart-Curnier function (newton.cpp).
+KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
+// Polyhedral friction (ctx.params->friction_model a pyramid), pyramid.cpp and
+// gauss_seidel.cpp: Lemke on the Stewart-Trinkle LCP, and Gauss-Seidel on the boxed form.
+KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
+KernelReport runBoxedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
 }  // namespace lcp_contact_solver

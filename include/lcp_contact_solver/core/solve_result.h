@@ -1,5 +1,7 @@
 #pragma once
 
+#include "lcp_contact_solver/core/solver_params.h"
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -23,6 +25,7 @@ enum class SolveStatus : std::uint8_t {
   kRayTermination,        // Lemke ended on a secondary ray: no solution found
   kNumericalFailure,      // a pivot or step became non-finite; best finite iterate kept
   kInvalidInput,          // the problem or parameters failed validation
+  kTimeBudget,            // SolverParams::time_budget ran out; best iterate returned
 };
 
 const char* statusName(SolveStatus status);
@@ -34,10 +37,20 @@ struct SolveResult {
   std::vector<ContactState> states;  // one per contact
   SolveStatus status = SolveStatus::kInvalidInput;
   bool converged = false;
-  int iterations = 0;         // sweeps (GS) or pivots (Lemke), summed over maxF re-solves
+  // Sweeps (pgs, nlgs), pivots (lemke), iterations (apgd), nlgs sweeps + Newton steps
+  // (newton); summed over maxF re-solves.
+  int iterations = 0;
   int resolves = 0;           // extra solves triggered by maxF
-  double solver_error = 0.0;  // the solver's own stopping measure at exit
-  double residual = 0.0;      // solver-independent residual (residual.h)
+  // The solver's own stopping measure at exit (the residual of the problem it solved: for
+  // a pyramid friction model, the pyramid's natural-map residual).
+  double solver_error = 0.0;
+  // Solver-independent residual (residual.h): always the Coulomb disc natural map, so a
+  // pyramid solution (friction_model below) keeps a nonzero residual where it slides or
+  // sticks outside the disc; its own pyramid residual is in solver_error.
+  double residual = 0.0;
+  // The friction law the forces solve: kCoulombDisc unless pgs or lemke solved a problem
+  // with friction under a pyramid SolverParams::friction_model.
+  FrictionModel friction_model = FrictionModel::kCoulombDisc;
   double solve_time = 0.0;    // wall time of the solve, seconds
   std::string solver;         // name of the solver that ran
   std::string message;        // human-readable detail for non-converged statuses

@@ -9,10 +9,28 @@
 namespace lcp_contact_solver {
 
 enum class SolverKind {
-  kAuto,       // nlgs when some contact has friction (μ > 0), otherwise pgs
-  kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); no friction
+  kAuto,       // friction (μ > 0): nlgs with the disc model, pgs with a pyramid; else pgs
+  kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); with friction
+               // only for a pyramid friction_model (boxed PGS)
   kNlgs,       // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)
-  kLemke,      // lexicographic Lemke pivoting; exact, for LCPs (no friction)
+  kLemke,      // lexicographic Lemke pivoting; exact, for LCPs (no friction, or friction
+               // with a pyramid friction_model: the Stewart-Trinkle LCP)
+  kApgd,       // accelerated projected gradient (Nesterov, adaptive step, restart) on the
+               // cone complementarity problem with De Saxcé's fixed point; Coulomb disc
+  kNewton,     // semismooth Newton on the Alart-Curnier function, regularized, with line
+               // search, warm-started by nlgs; high accuracy, rank-deficient W
+};
+
+// The friction law. The disc is Coulomb's isotropic cone |λ_t| <= μ λ_n. The pyramids
+// replace it by a polygon circumscribing the disc: 4 facets is the box |λ_t1|, |λ_t2| <=
+// μ λ_n (threshold μ along a tangent, μ√2 along a diagonal), 8 facets the regular octagon
+// with facet normals every 45° (threshold μ along those, μ/cos 22.5° ≈ 1.08 μ between).
+// Only pgs and lemke solve a pyramid (it makes the problem an LCP); the other solvers
+// always solve the disc. A pyramid solution has a nonzero disc residual by design.
+enum class FrictionModel {
+  kCoulombDisc,  // "disc"
+  kPyramid4,     // "pyramid4"
+  kPyramid8,     // "pyramid8"
 };
 
 // How the Gauss-Seidel solvers decide they are done.
@@ -61,6 +79,16 @@ struct SolverParams {
   bool displayDebug = false;
 
   SolverKind solver = SolverKind::kAuto;
+  // Over-relaxation ω of the Gauss-Seidel solvers (pgs, nlgs), in (0, 2): each contact
+  // moves λ_c <- λ_c + ω (λ_c^local - λ_c) and is projected back onto its feasible set.
+  // 1 is plain Gauss-Seidel (bit-identical to no relaxation).
+  double sor = 1.0;
+  // Friction law for pgs and lemke (see FrictionModel).
+  FrictionModel friction_model = FrictionModel::kCoulombDisc;
+  // Wall-clock budget of one solve in seconds (0 = none). When it runs out the kernel
+  // stops with its best iterate and status kTimeBudget. Checked once per sweep,
+  // iteration or pivot, so the overshoot is at most one of those.
+  double time_budget = 0.0;
   StoppingRule stopping_rule = StoppingRule::kResidual;
   // Refuse problems with more rows than this (0 = no limit); protects against
   // allocation failures from hostile input.
@@ -68,11 +96,15 @@ struct SolverParams {
 };
 
 const char* solverName(SolverKind kind);
-// Parses "auto", "pgs", "nlgs", "lemke"; returns false for an unknown name.
+// Parses "auto", "pgs", "nlgs", "lemke", "apgd", "newton"; false for an unknown name.
 bool parseSolverName(const std::string& name, SolverKind* kind);
 std::vector<std::string> solverNames();
 const char* stoppingRuleName(StoppingRule rule);
 bool parseStoppingRule(const std::string& name, StoppingRule* rule);
+// "disc", "pyramid4", "pyramid8".
+const char* frictionModelName(FrictionModel model);
+bool parseFrictionModel(const std::string& name, FrictionModel* model);
+std::vector<std::string> frictionModelNames();
 
 // Empty string if the parameters are valid, otherwise a sentence naming the bad field.
 std::string validateParams(const SolverParams& params);

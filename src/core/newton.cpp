@@ -1,0 +1,495 @@
+// Semismooth Newton on the Alart-Curnier function, regularized and globalised by a line
+// search, warm-started by a few nlgs sweeps.
+//
+// Derivation. With u = W λ + d_free (W + r I when regularized) and per contact weights
+// ρ_n, ρ_t > 0 (the inverse diagonal of the contact's block, so every row is scaled like
+// a force), Coulomb's law is Φ(λ) = 0 for the Alart-Curnier function
+//   Φ_n = λ_n - max(0, s_n),                  s_n = λ_n - ρ_n u_n
+//   Φ_t = λ_t - Proj_D(R)(z),  R = μ max(0, s_n),  z = λ_t - ρ_t u_t
+// (D(R) the disc of radius R): the normal part is 0 <= λ_n ⟂ u_n >= 0, and the tangential
+// part says λ_t = z when |z| <= R (stick, u_t = 0) and λ_t = R z/|z| otherwise (slip, the
+// force on the disc opposite u_t). Frictionless rows use Φ_n alone, bilateral rows
+// Φ = ρ u, ignored rows and the tangents of μ = 0 contacts Φ = λ. Φ is piecewise smooth;
+// one element of its generalised Jacobian is J = A + B W with contact-block-diagonal A, B:
+//   s_n > 0:  dΦ_n = ρ_n W_n            s_n <= 0:  dΦ_n = e_nᵀ
+//   |z| <= R: dΦ_t = ρ_t W_t
+//   |z| > R:  dΦ_t = (I - P) E_t + ρ_t P W_t - [s_n > 0] μ ẑ (e_nᵀ - ρ_n W_n),
+//             P = (R/|z|)(I - ẑ ẑᵀ),  ẑ = z/|z|
+// (rows W_n, W_t of W; E_t picks λ_t). Newton's step solves (J + ε I) Δ = -Φ.
+//
+// Rank-deficient W. When more rows stick than the bodies have degrees of freedom, the
+// rows ρ W of J are linearly dependent and J is singular; the forces are not unique but
+// the velocities are. The ε I term is a Levenberg-Marquardt / proximal regularization
+// of the linearisation only: it picks a small step among the many that solve it, while
+// Φ = 0 (the unregularized law) stays the target, so the limit is an exact solution. ε
+// follows the residual (ε = c · min(1, residual) >= 1e-8, c adaptive: divided by 10
+// after a step, multiplied by 100 when no step decreases the merit), which keeps the
+// local convergence fast and turns the step into a damped projected-Jacobi step
+// (Δ ≈ -Φ/ε) far from the solution; the floor keeps steps along W's null space short.
+//
+// Hybrid. Semismooth Newton converges fast once the contact states (open, stick, slip)
+// are right but can crawl while they change. So it starts from 20 nlgs sweeps (or
+// residual 1e-3), and whenever 10 Newton steps fail to halve the residual, up to 100
+// nlgs sweeps from the best iterate (or a tenfold decrease) move the states on before
+// Newton resumes. Iterations count Newton steps plus nlgs sweeps.
+//
+// Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
+// ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
+// Each iteration costs one factorisation: dense LU for dense W, sparse LU on the
+// block pattern of W for block-sparse W.
+//
+// When to use it: when high accuracy is wanted (1e-8..1e-12), on small and medium
+// problems (up to a few thousand rows), including ill-conditioned or rank-deficient W
+// where Gauss-Seidel stalls; each iteration is far more expensive than a sweep.
+#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <variant>
+
+namespace lcp_contact_solver {
+namespace {
+
+// Warm start: nlgs sweeps until this residual (or the tolerance, if larger) or this
+// many sweeps.
+constexpr double kWarmupTolerance = 1e-3;
+constexpr int kWarmupSweeps = 20;
+constexpr double kArmijo = 1e-4;
+constexpr int kMaxLineSearch = 30;
+constexpr double kRegularizationMin = 1e-8;
+constexpr double kRegularizationMax = 1e4;
+constexpr double kRegularizationStart = 1.0;
+// Stall: the residual must fall below kStallFactor times its value kStallWindow Newton
+// steps earlier; otherwise up to kBurstSweeps nlgs sweeps (or a kBurstReduction-fold
+// decrease) run before Newton resumes.
+constexpr int kStallWindow = 10;
+constexpr double kStallFactor = 0.5;
+constexpr int kBurstSweeps = 100;
+constexpr double kBurstReduction = 0.1;
+
+enum class RowKind : std::uint8_t { kIdentity, kNormal, kFrictional, kFrictionalNormalOnly, kBilateral };
+
+struct NewtonContact {
+  RowKind kind = RowKind::kIdentity;
+  int offset = 0;
+  int rows = 0;
+  double mu = 0.0;
+  double rho_n = 1.0;
+  double rho_t = 1.0;
+};
+
+// Per contact, row-major rows×rows blocks: J_c = A_c E_c + B_c W_c (see above).
+struct JacobianBlocks {
+  double A[36];
+  double B[36];
+};
+
+std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
+  const Problem& problem = *ctx.problem;
+  std::vector<NewtonContact> contacts(problem.contacts.size());
+  // Fallback weight for a non-positive diagonal: the largest diagonal of W.
+  double fallback = 0.0;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Eigen::MatrixXd D = diagonalBlock(problem.W, ctx.offsets[i], problem.contacts[i].rows);
+    fallback = std::max(fallback, D.diagonal().maxCoeff() + ctx.regularization);
+  }
+  const double rho_fallback = fallback > 0.0 ? 1.0 / fallback : 1.0;
+  auto inverse = [&](double w) { return w > 0.0 ? 1.0 / w : rho_fallback; };
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const Contact& c = problem.contacts[i];
+    NewtonContact& nc = contacts[i];
+    nc.offset = ctx.offsets[i];
+    nc.rows = c.rows;
+    nc.mu = ctx.mu[i];
+    if (ctx.ignored[i]) continue;  // kIdentity: Φ = λ keeps the force at zero
+    Eigen::MatrixXd D = diagonalBlock(problem.W, nc.offset, c.rows);
+    D.diagonal().array() += ctx.regularization;
+    switch (c.type) {
+      case ContactType::kBilateral:
+        nc.kind = RowKind::kBilateral;
+        nc.rho_n = inverse(D.diagonal().maxCoeff());
+        break;
+      case ContactType::kFrictionless:
+        nc.kind = RowKind::kNormal;
+        nc.rho_n = inverse(D(0, 0));
+        break;
+      case ContactType::kFrictional:
+        nc.kind = nc.mu > 0.0 ? RowKind::kFrictional : RowKind::kFrictionalNormalOnly;
+        nc.rho_n = inverse(D(0, 0));
+        nc.rho_t = inverse(0.5 * (D(1, 1) + D(2, 2)));
+        break;
+    }
+  }
+  return contacts;
+}
+
+// Φ of one contact from λ_c, u_c; with `blocks`, also its Jacobian blocks.
+void contactFunction(const NewtonContact& nc, const double* l, const double* u, double* phi,
+                     JacobianBlocks* blocks) {
+  const int m = nc.rows;
+  if (blocks != nullptr) {
+    std::fill(blocks->A, blocks->A + m * m, 0.0);
+    std::fill(blocks->B, blocks->B + m * m, 0.0);
+  }
+  auto A = [&](int i, int j) -> double& { return blocks->A[i * m + j]; };
+  auto B = [&](int i, int j) -> double& { return blocks->B[i * m + j]; };
+  switch (nc.kind) {
+    case RowKind::kIdentity:
+      for (int k = 0; k < m; ++k) {
+        phi[k] = l[k];
+        if (blocks) A(k, k) = 1.0;
+      }
+      return;
+    case RowKind::kBilateral:
+      for (int k = 0; k < m; ++k) {
+        phi[k] = nc.rho_n * u[k];
+        if (blocks) B(k, k) = nc.rho_n;
+      }
+      return;
+    case RowKind::kNormal:
+    case RowKind::kFrictionalNormalOnly:
+    case RowKind::kFrictional:
+      break;
+  }
+  const double s_n = l[0] - nc.rho_n * u[0];
+  if (s_n > 0.0) {
+    phi[0] = nc.rho_n * u[0];
+    if (blocks) B(0, 0) = nc.rho_n;
+  } else {
+    phi[0] = l[0];
+    if (blocks) A(0, 0) = 1.0;
+  }
+  if (nc.kind == RowKind::kNormal) return;
+  if (nc.kind == RowKind::kFrictionalNormalOnly) {
+    phi[1] = l[1];
+    phi[2] = l[2];
+    if (blocks) A(1, 1) = A(2, 2) = 1.0;
+    return;
+  }
+  const double R = nc.mu * std::max(0.0, s_n);
+  const double z0 = l[1] - nc.rho_t * u[1], z1 = l[2] - nc.rho_t * u[2];
+  const double zn = std::sqrt(z0 * z0 + z1 * z1);
+  if (zn <= R) {  // stick: λ_t = z, i.e. u_t = 0
+    phi[1] = nc.rho_t * u[1];
+    phi[2] = nc.rho_t * u[2];
+    if (blocks) B(1, 1) = B(2, 2) = nc.rho_t;
+    return;
+  }
+  // slip (zn > R >= 0, so zn > 0)
+  const double h0 = z0 / zn, h1 = z1 / zn;
+  phi[1] = l[1] - R * h0;
+  phi[2] = l[2] - R * h1;
+  if (!blocks) return;
+  const double ratio = R / zn;
+  const double P00 = ratio * (1.0 - h0 * h0), P01 = -ratio * h0 * h1, P11 = ratio * (1.0 - h1 * h1);
+  A(1, 1) = 1.0 - P00;
+  A(1, 2) = -P01;
+  A(2, 1) = -P01;
+  A(2, 2) = 1.0 - P11;
+  B(1, 1) = nc.rho_t * P00;
+  B(1, 2) = nc.rho_t * P01;
+  B(2, 1) = nc.rho_t * P01;
+  B(2, 2) = nc.rho_t * P11;
+  if (s_n > 0.0) {
+    A(1, 0) = -nc.mu * h0;
+    A(2, 0) = -nc.mu * h1;
+    B(1, 0) = nc.mu * nc.rho_n * h0;
+    B(2, 0) = nc.mu * nc.rho_n * h1;
+  }
+}
+
+// Φ(λ) for all contacts; returns ½|Φ|².
+double evaluate(const std::vector<NewtonContact>& contacts, const Eigen::VectorXd& lambda,
+                const Eigen::VectorXd& u, Eigen::VectorXd& phi, std::vector<JacobianBlocks>* blocks) {
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const NewtonContact& nc = contacts[i];
+    contactFunction(nc, lambda.data() + nc.offset, u.data() + nc.offset, phi.data() + nc.offset,
+                    blocks ? &(*blocks)[i] : nullptr);
+  }
+  return 0.5 * phi.squaredNorm();
+}
+
+// The Newton matrix J + ε I and its factorisation, dense or on W's block pattern.
+class NewtonSystem {
+ public:
+  virtual ~NewtonSystem() = default;
+  // Builds and factorises; false if the factorisation failed.
+  virtual bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
+                         double epsilon) = 0;
+  virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
+};
+
+class DenseSystem : public NewtonSystem {
+ public:
+  DenseSystem(const Eigen::MatrixXd& W, double regularization)
+      : W_(W), J_(W.rows(), W.cols()), lu_(static_cast<int>(W.rows())) {
+    W_.diagonal().array() += regularization;
+  }
+  bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
+                 double epsilon) override {
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      const NewtonContact& nc = contacts[i];
+      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> A(
+          blocks[i].A, nc.rows, nc.rows), B(blocks[i].B, nc.rows, nc.rows);
+      J_.middleRows(nc.offset, nc.rows).noalias() = B * W_.middleRows(nc.offset, nc.rows);
+      J_.block(nc.offset, nc.offset, nc.rows, nc.rows) += A;
+    }
+    J_.diagonal().array() += epsilon;
+    lu_.compute(J_);
+    return true;
+  }
+  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override { x = lu_.solve(rhs); }
+
+ private:
+  Eigen::MatrixXd W_;
+  Eigen::MatrixXd J_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+};
+
+class SparseSystem : public NewtonSystem {
+ public:
+  SparseSystem(const BlockSparseMatrix& W, double regularization) : W_(W), regularization_(regularization) {
+    const int n = W.rows();
+    const int nb = W.blockCount();
+    std::vector<Eigen::Triplet<double>> triplets;
+    auto addBlock = [&](int bi, int bj) {
+      for (int r = W.block_offset[bi]; r < W.block_offset[bi + 1]; ++r)
+        for (int c = W.block_offset[bj]; c < W.block_offset[bj + 1]; ++c) triplets.emplace_back(r, c, 1.0);
+    };
+    for (int bi = 0; bi < nb; ++bi) {
+      addBlock(bi, bi);
+      for (int s = W.row_start[bi]; s < W.row_start[bi + 1]; ++s) addBlock(bi, W.block_col[s]);
+    }
+    J_.resize(n, n);
+    J_.setFromTriplets(triplets.begin(), triplets.end());
+    J_.makeCompressed();
+    // Where each stored W entry and each diagonal-block entry lives in J's values.
+    auto position = [&](int r, int c) { return static_cast<int>(&J_.coeffRef(r, c) - J_.valuePtr()); };
+    block_positions_.resize(W.block_col.size());
+    for (int bi = 0; bi < nb; ++bi) {
+      for (int s = W.row_start[bi]; s < W.row_start[bi + 1]; ++s) {
+        const int bj = W.block_col[s];
+        for (int r = W.block_offset[bi]; r < W.block_offset[bi + 1]; ++r)
+          for (int c = W.block_offset[bj]; c < W.block_offset[bj + 1]; ++c) block_positions_[s].push_back(position(r, c));
+      }
+    }
+    diagonal_positions_.resize(nb);
+    for (int bi = 0; bi < nb; ++bi)
+      for (int r = W.block_offset[bi]; r < W.block_offset[bi + 1]; ++r)
+        for (int c = W.block_offset[bi]; c < W.block_offset[bi + 1]; ++c) diagonal_positions_[bi].push_back(position(r, c));
+    lu_.analyzePattern(J_);
+  }
+
+  bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
+                 double epsilon) override {
+    double* values = J_.valuePtr();
+    std::fill(values, values + J_.nonZeros(), 0.0);
+    // Block rows of W are the contacts (validateProblem checks the offsets match).
+    for (std::size_t bi = 0; bi < contacts.size(); ++bi) {
+      const int m = contacts[bi].rows;
+      const double* B = blocks[bi].B;
+      for (int s = W_.row_start[bi]; s < W_.row_start[bi + 1]; ++s) {
+        const int bj = W_.block_col[s];
+        const int cols = W_.block_offset[bj + 1] - W_.block_offset[bj];
+        const double* w = W_.values.data() + W_.value_start[s];
+        const int* pos = block_positions_[s].data();
+        for (int r = 0; r < m; ++r)
+          for (int c = 0; c < cols; ++c) {
+            double sum = 0.0;
+            for (int k = 0; k < m; ++k) sum += B[r * m + k] * w[k * cols + c];
+            values[pos[r * cols + c]] += sum;
+          }
+      }
+      const int* diag = diagonal_positions_[bi].data();
+      const double* A = blocks[bi].A;
+      for (int r = 0; r < m; ++r)
+        for (int c = 0; c < m; ++c) {
+          // (B (r I))_rc = r B_rc on the diagonal block.
+          values[diag[r * m + c]] += A[r * m + c] + regularization_ * B[r * m + c] + (r == c ? epsilon : 0.0);
+        }
+    }
+    lu_.factorize(J_);
+    return lu_.info() == Eigen::Success;
+  }
+  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override { x = lu_.solve(rhs); }
+
+ private:
+  const BlockSparseMatrix& W_;
+  double regularization_;
+  Eigen::SparseMatrix<double> J_;
+  std::vector<std::vector<int>> block_positions_;
+  std::vector<std::vector<int>> diagonal_positions_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
+};
+
+}  // namespace
+
+KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const Problem& problem = *ctx.problem;
+  const SolverParams& params = *ctx.params;
+  KernelReport report;
+  const int n = problem.rowCount();
+
+  // Already solved (a warm start from the previous answer): nothing to do.
+  {
+    const double residual = ctx.residual(lambda);
+    if (residual <= params.tolerance) {
+      report.status = SolveStatus::kConverged;
+      report.solver_error = residual;
+      return report;
+    }
+  }
+  // Warm start: a few nlgs sweeps find the contact states cheaply.
+  SolverParams warm_params = params;
+  warm_params.tolerance = std::max(params.tolerance, kWarmupTolerance);
+  warm_params.maxIt = std::min(params.maxIt, kWarmupSweeps);
+  warm_params.stopping_rule = StoppingRule::kResidual;
+  SolveContext warm_ctx = ctx;
+  warm_ctx.params = &warm_params;
+  const Eigen::VectorXd start = lambda;
+  const KernelReport warm = runNonlinearGaussSeidel(warm_ctx, lambda);
+  int warm_sweeps = 0;
+  if (warm.status == SolveStatus::kZeroDiagonal || !lambda.allFinite()) {
+    lambda = start;  // nlgs cannot run here; Newton can (ε I regularizes)
+  } else {
+    warm_sweeps = warm.iterations;
+    report.history = warm.history;
+  }
+  report.iterations = warm_sweeps;
+  if (warm.status == SolveStatus::kTimeBudget) {
+    report.status = SolveStatus::kTimeBudget;
+    report.solver_error = ctx.residual(lambda);
+    report.message = warm.message;
+    return report;
+  }
+
+  const std::vector<NewtonContact> contacts = newtonContacts(ctx);
+  std::vector<JacobianBlocks> blocks(contacts.size());
+  std::unique_ptr<NewtonSystem> system;
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+    system = std::make_unique<DenseSystem>(*dense, ctx.regularization);
+  } else {
+    system = std::make_unique<SparseSystem>(std::get<BlockSparseMatrix>(problem.W), ctx.regularization);
+  }
+
+  Eigen::VectorXd u(n), phi(n), rhs(n), delta(n), w_delta(n), trial(n), u_trial(n), phi_trial(n);
+  auto applyW = [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+    multiply(problem.W, x, y);
+    if (ctx.regularization != 0.0) y += ctx.regularization * x;
+  };
+  Eigen::VectorXd best = lambda;
+  double best_residual = std::numeric_limits<double>::infinity();
+  double c_reg = kRegularizationStart;
+  int newton_steps = 0;
+  int sweeps = warm_sweeps;
+  bool nlgs_usable = warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
+  double checkpoint_residual = std::numeric_limits<double>::infinity();
+  int since_checkpoint = 0;
+  SolverParams burst_params = warm_params;
+  SolveContext burst_ctx = ctx;
+  burst_ctx.params = &burst_params;
+  report.status = SolveStatus::kMaxIterations;
+  for (;;) {
+    applyW(lambda, u);
+    u += problem.d_free;
+    const double residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
+    if (residual < best_residual) {
+      best_residual = residual;
+      best = lambda;
+    }
+    if (residual <= params.tolerance) {
+      report.status = SolveStatus::kConverged;
+      break;
+    }
+    if (newton_steps + sweeps >= params.maxIt) {
+      report.message = "maxIt (" + std::to_string(params.maxIt) + ") iterations (" + std::to_string(sweeps) +
+                       " nlgs sweeps, " + std::to_string(newton_steps) + " Newton steps) reached before the tolerance";
+      break;
+    }
+    if (newton_steps > 0 && ctx.deadlinePassed()) {
+      report.status = SolveStatus::kTimeBudget;
+      report.message = "time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
+                       std::to_string(newton_steps) + " Newton steps and " + std::to_string(sweeps) +
+                       " nlgs sweeps; best iterate returned";
+      break;
+    }
+    // Stall detection: Newton must halve the residual every kStallWindow steps. When it
+    // does not (active set still changing, kinks, tiny steps), a burst of nlgs sweeps
+    // from the best iterate moves the contact states, then Newton resumes.
+    if (since_checkpoint == 0) checkpoint_residual = residual;
+    if (since_checkpoint >= kStallWindow) {
+      since_checkpoint = 0;
+      if (residual > kStallFactor * checkpoint_residual && nlgs_usable) {
+        lambda = best;
+        burst_params.tolerance = std::max(params.tolerance, kBurstReduction * best_residual);
+        burst_params.maxIt = std::min(kBurstSweeps, params.maxIt - newton_steps - sweeps);
+        const KernelReport burst = runNonlinearGaussSeidel(burst_ctx, lambda);
+        sweeps += burst.iterations;
+        report.history.insert(report.history.end(), burst.history.begin(), burst.history.end());
+        if (burst.status == SolveStatus::kZeroDiagonal || burst.status == SolveStatus::kNumericalFailure) {
+          nlgs_usable = false;
+          lambda = best;
+        }
+        if (burst.status == SolveStatus::kTimeBudget) {
+          report.status = SolveStatus::kTimeBudget;
+          report.message = burst.message;
+          break;
+        }
+        c_reg = kRegularizationStart;
+        continue;
+      }
+      checkpoint_residual = residual;
+    }
+    ++since_checkpoint;
+    ++newton_steps;
+    const double merit = evaluate(contacts, lambda, u, phi, &blocks);
+    const double epsilon = std::clamp(c_reg * std::min(1.0, residual), kRegularizationMin, kRegularizationMax);
+    bool stepped = false;
+    if (system->factorize(contacts, blocks, epsilon)) {
+      rhs = -phi;
+      system->solve(rhs, delta);
+      if (delta.allFinite()) {
+        applyW(delta, w_delta);
+        double t = 1.0;
+        for (int ls = 0; ls < kMaxLineSearch; ++ls, t *= 0.5) {
+          trial = lambda + t * delta;
+          u_trial = u + t * w_delta;
+          const double trial_merit = evaluate(contacts, trial, u_trial, phi_trial, nullptr);
+          if (trial_merit <= (1.0 - 2.0 * kArmijo * t) * merit) {
+            lambda = trial;
+            stepped = true;
+            break;
+          }
+        }
+      }
+    }
+    if (params.displayDebug) report.history.push_back(residual);
+    if (!stepped) {
+      c_reg *= 100.0;  // toward a short projected step
+      if (c_reg * std::min(1.0, residual) > kRegularizationMax) {
+        report.status = SolveStatus::kNumericalFailure;
+        report.message = "newton: no step decreases the merit even with the largest regularization after " +
+                         std::to_string(newton_steps) + " steps; best iterate returned";
+        break;
+      }
+    } else {
+      c_reg = std::max(c_reg * 0.1, kRegularizationMin);
+    }
+  }
+  if (!lambda.allFinite() || report.status != SolveStatus::kConverged) lambda = best;
+  report.iterations = sweeps + newton_steps;
+  if (report.message.empty())
+    report.message = std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";
+  report.solver_error = ctx.residual(lambda);
+  return report;
+}
+
+}  // namespace lcp_contact_solver

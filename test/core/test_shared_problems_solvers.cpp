@@ -1,0 +1,130 @@
+// The added solvers on the shared reference problems (../shared/problems, Siconos test
+// data written by others): what each must reach there.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/problem_io.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace lcp_contact_solver {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> fc3dFiles() {
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(fs::path(LCS_PROBLEMS_DIR) / "fc3d"))
+    if (entry.is_regular_file()) files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string baseName(const std::string& path) { return fs::path(path).filename().string(); }
+
+bool startsWith(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+SolverParams params(SolverKind kind, double tolerance, int max_it) {
+  SolverParams p;
+  p.solver = kind;
+  p.tolerance = tolerance;
+  p.maxIt = max_it;
+  p.initial_guess = false;
+  return p;
+}
+
+void expectFinite(const SolveResult& r, const std::string& what) {
+  EXPECT_TRUE(r.forces.allFinite()) << what;
+  EXPECT_TRUE(r.d.allFinite()) << what;
+  EXPECT_TRUE(std::isfinite(r.residual)) << what;
+}
+
+// Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
+TEST(SharedProblemsSolvers, NewtonReachesTenDigitsOnTheRankDeficientStacks) {
+  for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat"}) {
+    const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / name).string());
+    const SolveResult r = solveProblem(p, params(SolverKind::kNewton, 1e-10, 10000));
+    expectFinite(r, name);
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << name << ": " << r.message;
+    EXPECT_LE(r.residual, 1e-10) << name;
+  }
+}
+
+TEST(SharedProblemsSolvers, NewtonReachesTheTightToleranceOnEveryFc3dProblem) {
+  for (const std::string& file : fc3dFiles()) {
+    const Problem p = readProblemFile(file);
+    const SolveResult r = solveProblem(p, params(SolverKind::kNewton, 1e-9, 100000));
+    expectFinite(r, file);
+    EXPECT_EQ(r.solver, "newton");
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << file << ": " << r.message;
+    EXPECT_LE(r.residual, 1e-8) << file;
+  }
+}
+
+TEST(SharedProblemsSolvers, ApgdReachesOneMicroOnRoverAndCapsules) {
+  int solved = 0;
+  for (const std::string& file : fc3dFiles()) {
+    const std::string name = baseName(file);
+    if (!startsWith(name, "Rover") && !startsWith(name, "Capsules")) continue;
+    const Problem p = readProblemFile(file);
+    const SolveResult r = solveProblem(p, params(SolverKind::kApgd, 1e-6, 100000));
+    expectFinite(r, file);
+    EXPECT_EQ(r.solver, "apgd");
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << file << ": " << r.message;
+    EXPECT_LE(r.residual, 1e-6) << file;
+    ++solved;
+  }
+  EXPECT_EQ(solved, 16);
+}
+
+// Including the rank-deficient stacks where nlgs stalls near 1e-6.
+TEST(SharedProblemsSolvers, ApgdReachesOneMicroOnTheStacks) {
+  for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat",
+                                 "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5"}) {
+    const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / name).string());
+    const SolveResult r = solveProblem(p, params(SolverKind::kApgd, 1e-6, 100000));
+    expectFinite(r, name);
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << name << ": " << r.message;
+    EXPECT_LE(r.residual, 1e-6) << name;
+  }
+}
+
+// Cut short, apgd says so and keeps its best iterate.
+TEST(SharedProblemsSolvers, ApgdCutShortIsHonest) {
+  const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "BoxesStack1-i100000-32.hdf5.dat").string());
+  const SolveResult r = solveProblem(p, params(SolverKind::kApgd, 1e-10, 50));
+  expectFinite(r, "BoxesStack1");
+  EXPECT_EQ(r.status, SolveStatus::kMaxIterations);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.iterations, 50);
+  EXPECT_LT(r.residual, 1e-1);
+}
+
+// Boxed pgs and Lemke solve the same pyramid problem on the small frictional files.
+TEST(SharedProblemsSolvers, PyramidPgsAndLemkeAgree) {
+  for (const std::string& file : fc3dFiles()) {
+    const Problem p = readProblemFile(file);
+    if (p.rowCount() > 30) continue;  // Lemke's dense tableau: the small problems only
+    for (FrictionModel model : {FrictionModel::kPyramid4, FrictionModel::kPyramid8}) {
+      SolverParams lemke_params = params(SolverKind::kLemke, 1e-9, 10000);
+      lemke_params.friction_model = model;
+      SolverParams pgs_params = params(SolverKind::kPgs, 1e-11, 100000);
+      pgs_params.friction_model = model;
+      const SolveResult lemke = solveProblem(p, lemke_params);
+      const SolveResult pgs = solveProblem(p, pgs_params);
+      const std::string what = baseName(file) + " " + frictionModelName(model);
+      expectFinite(lemke, what);
+      ASSERT_EQ(lemke.status, SolveStatus::kConverged) << what << ": " << lemke.message;
+      ASSERT_EQ(pgs.status, SolveStatus::kConverged) << what << ": " << pgs.message;
+      EXPECT_EQ(lemke.friction_model, model);
+      EXPECT_EQ(pgs.friction_model, model);
+      EXPECT_LE(lemke.solver_error, 1e-9) << what;
+      // The velocities are unique even where W is singular and the forces are not.
+      EXPECT_LE((lemke.d - pgs.d).norm(), 1e-6 * p.d_free.norm()) << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lcp_contact_solver
