@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace lcp_contact_solver_ros {
 
@@ -40,7 +41,7 @@ ContactSolverNode::ContactSolverNode(const ros::NodeHandle& nh, const ros::NodeH
       pnh_(pnh),
       accepted_(loadOrThrow(pnh)),
       active_(accepted_),
-      solver_(accepted_.solver),
+      cycle_(accepted_.solver),
       updater_(nh, pnh, pnh.getNamespace()) {
   setUpDiagnostics();
   setUpReconfigure();
@@ -98,29 +99,24 @@ void ContactSolverNode::onPair(const ContactArray::ConstPtr& contacts, const Com
   pairing_.paired(contacts->header.stamp);
   applyAcceptedSettings();
 
-  lcs::Problem problem;
-  std::vector<ContactFrame> frames;
-  const std::string error = toProblem(*contacts, *compliance, active_.solver.max_rows, &problem, &frames);
-  if (!error.empty()) {
-    reject(contacts->header, SolverStats::INVALID_INPUT, error);
+  // computeConstraintForces=false only saves building the message when nobody listens.
+  const bool want_forces = active_.solver.computeConstraintForces || forces_pub_.getNumSubscribers() > 0;
+  CycleOutput cycle = cycle_.solve(*contacts, *compliance, want_forces);
+  if (cycle.rejected()) {
+    reject(contacts->header, SolverStats::INVALID_INPUT, cycle.error);
     return;
   }
-  const lcs::SolveResult result = solver_.solve(problem);
-  if (result.status == lcs::SolveStatus::kInvalidInput) {  // refused by the core's own checks
-    reject(contacts->header, SolverStats::INVALID_INPUT, result.message);
-    return;
-  }
-  recordSolve(result);
+  recordSolve(cycle.result);
 
-  auto stats = boost::make_shared<SolverStats>(toStatsMsg(contacts->header, problem, result));
-  if (solveGaveForces(result)) {
-    stats->forces_published = publishForces(*contacts, frames, problem, result);
+  auto stats = boost::make_shared<SolverStats>(cycle.stats);
+  if (cycle.gave_forces) {
+    stats->forces_published = want_forces && publishForces(contacts->header, &cycle);
   } else {
     ROS_ERROR_STREAM_THROTTLE(1.0, "Contacts at " << stampText(contacts->header.stamp) << ": solve failed ("
-                                                  << stats->status << "): " << result.message);
+                                                  << stats->status << "): " << cycle.result.message);
   }
-  stats->markers_published = publishMarkers(contacts->header, frames, problem, result);
-  if (active_.solver.displayDebug) logCycle(problem, result);
+  stats->markers_published = publishMarkers(contacts->header, cycle.frames, cycle.problem, cycle.result);
+  if (active_.solver.displayDebug) logCycle(cycle.problem, cycle.result);
   if (allFinite(*stats)) stats_pub_.publish(stats);
 }
 
@@ -139,22 +135,20 @@ bool ContactSolverNode::onSolveService(lcp_contact_solver::SolveContacts::Reques
   }
   if (const std::string error = lcs::validateParams(params); !error.empty()) return fail(error);
 
-  lcs::Problem problem;
-  std::vector<ContactFrame> frames;
-  if (const std::string error = toProblem(request.contacts, request.compliance, params.max_rows, &problem, &frames);
-      !error.empty())
-    return fail(error);
-  const lcs::SolveResult result = lcs::solveProblem(problem, params);
-  if (result.status == lcs::SolveStatus::kInvalidInput) return fail(result.message);
+  // A fresh cycle solver: no warm start memory, the node's own one untouched.
+  params.initial_guess = false;
+  CycleSolver one_off(params);
+  CycleOutput cycle = one_off.solve(request.contacts, request.compliance);
+  if (cycle.rejected()) return fail(cycle.error);
 
-  response.stats = toStatsMsg(request.contacts.header, problem, result);
-  if (solveGaveForces(result)) {
-    response.forces = toConstraintForcesMsg(request.contacts, frames, problem, result);
-    if (!allFinite(response.forces)) return fail("the solve produced a non-finite force");
+  response.stats = cycle.stats;
+  if (cycle.gave_forces) {
+    if (!cycle.has_forces) return fail("the solve produced a non-finite force");
+    response.forces = std::move(cycle.forces);
     response.stats.forces_published = true;
   }
   response.success = true;
-  response.message = response.stats.status + (result.message.empty() ? "" : ": " + result.message);
+  response.message = response.stats.status + (cycle.result.message.empty() ? "" : ": " + cycle.result.message);
   return true;
 }
 
@@ -203,7 +197,7 @@ void ContactSolverNode::applyAcceptedSettings() {
     next = accepted_;
     settings_changed_ = false;
   }
-  const std::string error = solver_.setParams(next.solver);
+  const std::string error = cycle_.setParams(next.solver);
   if (!error.empty()) {  // validated when accepted; kept as a guard
     ROS_ERROR_STREAM("Parameters refused by the solver: " << error);
     return;
@@ -230,18 +224,13 @@ void ContactSolverNode::reject(const std_msgs::Header& header, std::uint8_t stat
   stats_pub_.publish(boost::make_shared<SolverStats>(rejectedStatsMsg(header, status_code, message)));
 }
 
-bool ContactSolverNode::publishForces(const ContactArray& contacts, const std::vector<ContactFrame>& frames,
-                                      const lcs::Problem& problem, const lcs::SolveResult& result) {
-  // computeConstraintForces=false only saves building the message when nobody listens.
-  if (!active_.solver.computeConstraintForces && forces_pub_.getNumSubscribers() == 0) return false;
-  auto forces = boost::make_shared<lcp_contact_solver::ConstraintForces>(
-      toConstraintForcesMsg(contacts, frames, problem, result));
-  if (!allFinite(*forces)) {
-    ROS_ERROR_STREAM_THROTTLE(1.0, "Contacts at " << stampText(contacts.header.stamp)
+bool ContactSolverNode::publishForces(const std_msgs::Header& header, CycleOutput* cycle) {
+  if (!cycle->has_forces) {
+    ROS_ERROR_STREAM_THROTTLE(1.0, "Contacts at " << stampText(header.stamp)
                                                   << ": a force is not finite; nothing published");
     return false;
   }
-  forces_pub_.publish(forces);
+  forces_pub_.publish(boost::make_shared<lcp_contact_solver::ConstraintForces>(std::move(cycle->forces)));
   return true;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/ros/cycle_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
 #include "lcp_contact_solver/ros/pairing_monitor.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
@@ -69,8 +70,7 @@ class ContactSolverNode {
   void applyAcceptedSettings();
   void recordSolve(const lcs::SolveResult& result);
   void reject(const std_msgs::Header& header, std::uint8_t status_code, const std::string& message);
-  bool publishForces(const ContactArray& contacts, const std::vector<ContactFrame>& frames,
-                     const lcs::Problem& problem, const lcs::SolveResult& result);
+  bool publishForces(const std_msgs::Header& header, CycleOutput* cycle);
   bool publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
                       const lcs::Problem& problem, const lcs::SolveResult& result);
   void logCycle(const lcs::Problem& problem, const lcs::SolveResult& result);
@@ -87,7 +87,7 @@ class ContactSolverNode {
 
   std::mutex solve_mutex_;  // guards the members down to health_
   NodeSettings active_;     // settings of the current cycle
-  lcs::ContactSolver solver_;
+  CycleSolver cycle_;       // messages → problem → solve (warm start) → messages
   PairingMonitor pairing_;
   Health health_;
 

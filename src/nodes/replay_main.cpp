@@ -1,0 +1,13 @@
+// rosrun lcp_contact_solver replay IN.bag [--out OUT.bag] [--csv STATS.csv] [name=value ...]
+// Offline replay of recorded contacts/compliance through the node's solve path; see
+// include/lcp_contact_solver/ros/replay.h and the README ("Replaying recorded traffic").
+#include "lcp_contact_solver/ros/replay.h"
+
+#include <iostream>
+#include <string>
+#include <vector>
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  return lcp_contact_solver_ros::runReplayCommand(args, std::cout, std::cerr);
+}

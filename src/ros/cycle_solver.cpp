@@ -1,0 +1,34 @@
+#include "lcp_contact_solver/ros/cycle_solver.h"
+
+namespace lcp_contact_solver_ros {
+
+using lcp_contact_solver::SolverStats;
+
+CycleSolver::CycleSolver(const lcs::SolverParams& params) : solver_(params) {}
+
+std::string CycleSolver::setParams(const lcs::SolverParams& params) { return solver_.setParams(params); }
+
+CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
+                               const lcp_contact_solver::Compliance& compliance, bool build_forces) {
+  CycleOutput out;
+  out.error = toProblem(contacts, compliance, solver_.params().max_rows, &out.problem, &out.frames);
+  if (out.error.empty()) {
+    out.result = solver_.solve(out.problem);
+    if (out.result.status == lcs::SolveStatus::kInvalidInput)  // refused by the core's own checks
+      out.error = out.result.message.empty() ? "invalid input" : out.result.message;
+  }
+  if (out.rejected()) {
+    out.stats = rejectedStatsMsg(contacts.header, SolverStats::INVALID_INPUT, out.error);
+    return out;
+  }
+  out.stats = toStatsMsg(contacts.header, out.problem, out.result);
+  out.gave_forces = solveGaveForces(out.result);
+  if (out.gave_forces && build_forces) {
+    out.forces = toConstraintForcesMsg(contacts, out.frames, out.problem, out.result);
+    out.has_forces = allFinite(out.forces);
+    if (!out.has_forces) out.forces = lcp_contact_solver::ConstraintForces();
+  }
+  return out;
+}
+
+}  // namespace lcp_contact_solver_ros
