@@ -1,0 +1,303 @@
+// Per-step solve time of the package's solvers against MuJoCo's own PGS, CG and Newton on
+// the same MuJoCo steps, at matched residual (the package's natural-map residual of the
+// pyramidal LCP, the one measure every solver is judged by).
+//
+//   mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]
+//                [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]
+//                [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]
+//
+// Default models: MuJoCo's 22_humanoids and humanoid100 (libmujoco-samples), pyramidal cone.
+// Each model runs a reference trajectory with MuJoCo's own default solver (Newton); the steps
+// first .. first+count−1 are measured. For each measured step (its state and MuJoCo's warm
+// start qacc_warmstart copied from the trajectory):
+//   - the problem W = efc_AR, d_free = efc_b over the contact and limit rows is extracted
+//     (W dense up to 200 rows, block-sparse above; --storage forces one, and the solver names
+//     then carry _dense / _sparse);
+//   - ours: ContactSolver with tolerance = R (stopping rule: the residual), warm-started from
+//     our own solution of the previous measured step, time = the core's solve time;
+//   - MuJoCo's solver S: tolerance 0 (runs every iteration) and the fewest iterations k whose
+//     efc_force has residual ≤ R (doubling, then bisection), time = mj_fwdConstraint at k.
+//     MuJoCo's PGS also needs efc_AR (mj_projectConstraint), timed apart ("mujoco_AR"); CG
+//     and Newton do not. Ours is given W = efc_AR, so its time excludes that build too.
+// Times are the minimum of --repeat runs. CSV: model,step,time,contacts,rows,solver,
+// iterations,residual,reached,seconds. A summary table (median per step) goes to stdout.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/scene/mujoco_adapter.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace lcp_contact_solver;
+using namespace lcp_contact_solver::scene;
+
+namespace {
+
+struct Options {
+  std::vector<std::string> models;
+  int first = 200;
+  int count = 40;
+  double target = 1e-6;
+  int repeat = 3;
+  std::vector<std::string> ours = {"pgs", "newton", "apgd", "lemke"};
+  int lemke_max_rows = 1000;
+  std::vector<std::string> mujoco = {"pgs", "cg", "newton"};
+  MujocoExtractOptions::Storage storage = MujocoExtractOptions::Storage::kAuto;
+  std::string csv;
+};
+
+struct Row {
+  std::string model, solver;
+  int step = 0, contacts = 0, rows = 0, iterations = 0;
+  double time = 0, residual = 0, seconds = 0;
+  bool reached = false;
+};
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// MuJoCo's solver `solver` with `iterations` on a copy of `snapshot`: its solve time and the
+// residual of its forces on `mp`.
+std::pair<double, double> runMujoco(const MujocoWorld& snapshot, MujocoWorld& scratch, const MujocoProblem& mp,
+                                    int solver, int iterations, int repeat) {
+  double best = 1e300, residual = 0.0;
+  for (int r = 0; r < repeat; ++r) {
+    scratch.copyDataFrom(snapshot);
+    mjModel* m = scratch.model();
+    m->opt.solver = solver;
+    m->opt.iterations = iterations;
+    m->opt.tolerance = 0.0;
+    double seconds = 0.0;
+    forwardToConstraints(m, scratch.data(), true, &seconds);
+    best = std::min(best, seconds);
+    residual = problemResidual(mp, mp.fromEfcForce(scratch.data()->efc_force));
+  }
+  return {best, residual};
+}
+
+// The fewest iterations reaching the target (doubling, then bisection), up to `cap`.
+int fewestIterations(const MujocoWorld& snapshot, MujocoWorld& scratch, const MujocoProblem& mp, int solver,
+                     double target, int cap) {
+  int hi = 1;
+  while (hi < cap && runMujoco(snapshot, scratch, mp, solver, hi, 1).second > target) hi *= 2;
+  hi = std::min(hi, cap);
+  if (runMujoco(snapshot, scratch, mp, solver, hi, 1).second > target) return cap;
+  int lo = hi / 2;  // fails (or 0)
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    if (runMujoco(snapshot, scratch, mp, solver, mid, 1).second <= target) hi = mid; else lo = mid;
+  }
+  return hi;
+}
+
+void benchModel(const std::string& path, const Options& o, std::vector<Row>* rows) {
+  MujocoOptions mo;
+  mo.cone = "pyramidal";
+  std::string error;
+  auto world = MujocoWorld::load(path, mo, &error);
+  if (!world) {
+    std::cerr << "mujoco_bench: " << error << "\n";
+    std::exit(2);
+  }
+  auto scratch = world->clone();
+  auto snapshot = world->clone();
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  name = name.substr(0, name.find_last_of('.'));
+
+  std::map<std::string, ContactSolver> ours;
+  for (const std::string& s : o.ours) {
+    SolverParams p;
+    if (!parseSolverName(s, &p.solver)) {
+      std::cerr << "mujoco_bench: unknown solver " << s << "\n";
+      std::exit(2);
+    }
+    p.tolerance = o.target;
+    p.maxIt = s == "lemke" ? 1000000 : 100000;
+    ours.emplace(s, ContactSolver(p));
+  }
+  std::vector<int> mj_solvers;
+  for (const std::string& s : o.mujoco) {
+    int solver = 0;
+    if (!parseMujocoSolver(s, &solver, &error)) {
+      std::cerr << "mujoco_bench: " << error << "\n";
+      std::exit(2);
+    }
+    mj_solvers.push_back(solver);
+  }
+  MujocoExtractOptions extract;
+  extract.storage = o.storage;
+  const std::string suffix = o.storage == MujocoExtractOptions::Storage::kDense         ? "_dense"
+                             : o.storage == MujocoExtractOptions::Storage::kBlockSparse ? "_sparse"
+                                                                                        : "";
+
+  for (int step = 0; step < o.first + o.count; ++step) {
+    if (step >= o.first) {
+      snapshot->copyDataFrom(*world);  // the state of this step, MuJoCo's warm start included
+      scratch->copyDataFrom(*snapshot);
+      forwardToConstraints(scratch->model(), scratch->data(), false);
+      MujocoProblem mp;
+      error = extractProblem(scratch->model(), scratch->data(), extract, &mp);
+      if (!error.empty()) {
+        std::cerr << "mujoco_bench: " << name << " step " << step << ": " << error << "\n";
+        std::exit(2);
+      }
+      if (!mp.problem.contacts.empty()) {
+        Row base;
+        base.model = name;
+        base.step = step;
+        base.time = mp.time;
+        base.contacts = mp.ncon;
+        base.rows = mp.problem.rowCount();
+        // efc_AR, which MuJoCo's PGS builds and ours is given.
+        double ar = 1e300;
+        for (int r = 0; r < o.repeat; ++r) ar = std::min(ar, computeConstraintAR(scratch->model(), scratch->data()));
+        Row r0 = base;
+        r0.solver = "mujoco_AR";
+        r0.seconds = ar;
+        r0.reached = true;
+        rows->push_back(r0);
+        for (auto& [solver_name, solver] : ours) {
+          if (solver_name == "lemke" && base.rows > o.lemke_max_rows) continue;
+          Row r = base;
+          r.solver = "ours_" + solver_name + suffix;
+          r.seconds = 1e300;
+          ContactSolver used = solver;
+          for (int k = 0; k < o.repeat; ++k) {
+            ContactSolver trial = solver;  // the same warm start each repeat
+            const SolveResult result = trial.solve(mp.problem);
+            r.seconds = std::min(r.seconds, result.solve_time);
+            r.iterations = result.iterations;
+            r.residual = result.residual;
+            r.reached = result.residual <= o.target;
+            used = trial;
+          }
+          solver = used;
+          rows->push_back(r);
+        }
+        for (int s : mj_solvers) {
+          Row r = base;
+          r.solver = std::string("mujoco_") + mujocoSolverName(s);
+          const int cap = s == mjSOL_PGS ? 100000 : 10000;
+          r.iterations = fewestIterations(*snapshot, *scratch, mp, s, o.target, cap);
+          const auto [seconds, residual] = runMujoco(*snapshot, *scratch, mp, s, r.iterations, o.repeat);
+          r.seconds = seconds;
+          r.residual = residual;
+          r.reached = residual <= o.target;
+          rows->push_back(r);
+        }
+        std::fprintf(stderr, "%s step %d: %d contacts, %d rows\n", name.c_str(), step, base.contacts, base.rows);
+      }
+    }
+    forwardToConstraints(world->model(), world->data(), true);  // the reference trajectory
+    error = integrateEuler(world->model(), world->data());
+    if (!error.empty()) {
+      std::cerr << "mujoco_bench: " << error << "\n";
+      std::exit(2);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::cerr << "mujoco_bench: " << a << " needs a value\n";
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--model") o.models.push_back(value());
+    else if (a == "--first") o.first = std::atoi(value().c_str());
+    else if (a == "--count") o.count = std::atoi(value().c_str());
+    else if (a == "--target") o.target = std::atof(value().c_str());
+    else if (a == "--repeat") o.repeat = std::max(1, std::atoi(value().c_str()));
+    else if (a == "--ours") o.ours = split(value());
+    else if (a == "--lemke-max-rows") o.lemke_max_rows = std::atoi(value().c_str());
+    else if (a == "--mujoco") {
+      const std::string v = value();
+      o.mujoco = v == "none" ? std::vector<std::string>() : split(v);
+    }
+    else if (a == "--storage") {
+      const std::string v = value();
+      if (v == "dense") o.storage = MujocoExtractOptions::Storage::kDense;
+      else if (v == "block_sparse") o.storage = MujocoExtractOptions::Storage::kBlockSparse;
+      else if (v == "auto") o.storage = MujocoExtractOptions::Storage::kAuto;
+      else {
+        std::cerr << "mujoco_bench: --storage takes auto, dense or block_sparse\n";
+        return 2;
+      }
+    }
+    else if (a == "--csv") o.csv = value();
+    else {
+      std::cerr << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
+                   "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
+                   "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n";
+      return a == "--help" || a == "-h" ? 0 : 2;
+    }
+  }
+  if (o.models.empty())
+    o.models = {"/usr/share/mujoco/model/humanoid/22_humanoids.xml", "/usr/share/mujoco/model/humanoid100/humanoid100.xml"};
+
+  std::vector<Row> rows;
+  for (const std::string& m : o.models) benchModel(m, o, &rows);
+
+  if (!o.csv.empty()) {
+    std::ofstream csv(o.csv);
+    csv << "model,step,time,contacts,rows,solver,iterations,residual,reached,seconds\n";
+    for (const Row& r : rows)
+      csv << r.model << ',' << r.step << ',' << r.time << ',' << r.contacts << ',' << r.rows << ',' << r.solver << ','
+          << r.iterations << ',' << r.residual << ',' << (r.reached ? 1 : 0) << ',' << r.seconds << '\n';
+  }
+
+  // Summary: per model and solver, medians over the measured steps.
+  std::printf("target residual %.0e (package measure), MuJoCo %s, times: min of %d runs, median over steps\n",
+              o.target, mj_versionString(), o.repeat);
+  std::printf("%-14s %-20s %6s %7s %6s %12s %10s %12s\n", "model", "solver", "steps", "reached", "rows", "iterations",
+              "ms/step", "max residual");
+  std::map<std::pair<std::string, std::string>, std::vector<const Row*>> groups;
+  std::vector<std::pair<std::string, std::string>> order;
+  for (const Row& r : rows) {
+    auto key = std::make_pair(r.model, r.solver);
+    if (!groups.count(key)) order.push_back(key);
+    groups[key].push_back(&r);
+  }
+  for (const auto& key : order) {
+    const auto& g = groups[key];
+    std::vector<double> t, it, n;
+    int reached = 0;
+    double worst = 0;
+    for (const Row* r : g) {
+      t.push_back(r->seconds);
+      it.push_back(r->iterations);
+      n.push_back(r->rows);
+      reached += r->reached;
+      worst = std::max(worst, r->residual);
+    }
+    std::printf("%-14s %-20s %6zu %7d %6.0f %12.0f %10.3f %12.1e\n", key.first.c_str(), key.second.c_str(), g.size(),
+                reached, median(n), median(it), 1e3 * median(t), worst);
+  }
+  return 0;
+}
