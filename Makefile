@@ -11,7 +11,7 @@ PROBLEMS_DIR ?= $(abspath ../shared/problems)
 export ROS_HOME := $(abspath $(BUILD_DIR))/ros_home
 export ROS_LOG_DIR := $(ROS_HOME)/log
 
-.PHONY: all deps configure build test demo clean
+.PHONY: all deps configure build test test-asan fuzz demo bench clean
 
 all: build
 
@@ -26,13 +26,85 @@ build: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target tests
 
 # Builds everything including tests, runs them all with ctest (catkin's `run_tests`
-# exits 0 on failure, so it is not used), and fails on any failure.
+# exits 0 on failure, so it is not used), and fails on any failure. Then the sanitizer
+# pass (test-asan).
+# SANITIZE=1 adds the AddressSanitizer/UBSan pass (test-asan) after ctest. It is off by
+# default until that pass has been verified on a clean clone within CI's time limit.
+SANITIZE ?= 0
 test: build
 	@mkdir -p $(ROS_LOG_DIR)
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j$(JOBS)
+	@if [ "$(SANITIZE)" = "1" ]; then $(MAKE) --no-print-directory test-asan; fi
 
+# The unit tests that need no roscore, once more under AddressSanitizer + UndefinedBehavior-
+# Sanitizer (LCS_SANITIZE=ON, RelWithDebInfo: Debug is ~30x slower on the solver tests) in
+# their own build folder; any sanitizer report fails the run (halt_on_error, leaks included).
+# allocator_may_return_null: an absurd allocation (a corrupt bag claiming 2^32 contacts) must
+# throw std::bad_alloc as it does without ASan, where the replay turns it into an error.
+ASAN_TESTS ?= test_core test_problem_io test_scene test_ros_msg_conversion test_scene_msg_conversion \
+              test_replay test_hard_cases test_adversarial_input test_fuzz_corpus
+ASAN_OPTIONS_TEST ?= detect_leaks=1:halt_on_error=1:abort_on_error=0:allocator_may_return_null=1
+UBSAN_OPTIONS_TEST ?= halt_on_error=1:print_stacktrace=1
+test-asan:
+	cmake -S . -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLCS_SANITIZE=ON
+	cmake --build $(ASAN_BUILD_DIR) -j$(JOBS) --target $(ASAN_TESTS)
+	@mkdir -p $(abspath $(ASAN_BUILD_DIR))/ros_home/log
+	ROS_HOME=$(abspath $(ASAN_BUILD_DIR))/ros_home ROS_LOG_DIR=$(abspath $(ASAN_BUILD_DIR))/ros_home/log \
+	ASAN_OPTIONS=$(ASAN_OPTIONS_TEST) UBSAN_OPTIONS=$(UBSAN_OPTIONS_TEST) \
+	  ctest --test-dir $(ASAN_BUILD_DIR) --output-on-failure -j$(JOBS) \
+	    -R '_gtest_($(shell echo $(ASAN_TESTS) | tr ' ' '|'))$$'
+
+# Fuzzing with clang's libFuzzer (not part of make test): builds the two targets of
+# test/fuzz/ (the .dat reader; message → problem → solve) with ASan + UBSan in
+# FUZZ_BUILD_DIR and runs each for FUZZ_SECONDS on the seeds of test/fuzz/corpus/<target>.
+# New inputs go to FUZZ_BUILD_DIR/corpus/<target>, crash inputs to FUZZ_BUILD_DIR/artifacts/;
+# a crash fails the target (fix it, then add the input to test/fuzz/corpus/<target>/, which
+# test_fuzz_corpus replays in make test).
+FUZZ_BUILD_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS ?= dat_reader msg_solve
+fuzz:
+	@scripts/install-deps fuzz
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DLCS_SANITIZE=ON -DLCS_FUZZ=ON
+	cmake --build $(FUZZ_BUILD_DIR) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(FUZZ_BUILD_DIR)/corpus/$$t $(FUZZ_BUILD_DIR)/artifacts || exit 1; \
+	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
+	  ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+	  $(FUZZ_BUILD_DIR)/devel/lib/lcp_contact_solver/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) \
+	    -max_len=4096 -timeout=20 -rss_limit_mb=2048 -print_final_stats=1 \
+	    -artifact_prefix=$(FUZZ_BUILD_DIR)/artifacts/$$t- \
+	    $(FUZZ_BUILD_DIR)/corpus/$$t test/fuzz/corpus/$$t || exit 1; \
+	done
+
+# Part 1: every shared problem through lcp_solve (a table, seconds). Part 2: the solver node
+# and the example simulator in closed loop on a scene (scripts/run-demo: starts roscore if no
+# master runs, ~10 s, a line per simulated second and the final body states, then stops
+# everything it started). DEMO_ARGS are demo.launch arguments, e.g.
+#   make demo DEMO_ARGS="scene:=incline duration:=5"
+DEMO_ARGS ?=
 demo: build
+	@echo "== Part 1: the shared problems, solved by lcp_solve =="
 	$(BUILD_DIR)/devel/lib/lcp_contact_solver/lcp_solve $(PROBLEMS_DIR)/lcp/*.dat $(PROBLEMS_DIR)/fc3d/*
+	@echo
+	@echo "== Part 2: contact solver node + scene simulator (ROS, simulated time) =="
+	BUILD_DIR=$(abspath $(BUILD_DIR)) DEMO_ARGS="$(DEMO_ARGS)" scripts/run-demo
+
+# The benchmark study (docs/BENCHMARKS.md): installs the optional peer/plotting packages,
+# builds bench/work_precision in its own folder, runs every solver and peer on every problem
+# (about 12 minutes on 2 cores) and redraws docs/figures/*.png and the tables in
+# docs/BENCHMARKS.md. Not part of `make test`. BENCH_ARGS passes options (e.g. --quick).
+BENCH_BUILD_DIR ?= build-bench
+BENCH_CSV ?= bench/results/work_precision.csv
+BENCH_ARGS ?=
+bench:
+	@scripts/install-deps bench
+	cmake -S . -B $(BENCH_BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BENCH_BUILD_DIR) -j$(JOBS) --target work_precision
+	@mkdir -p $(dir $(BENCH_CSV))
+	$(BENCH_BUILD_DIR)/devel/lib/lcp_contact_solver/work_precision --out $(BENCH_CSV) $(BENCH_ARGS)
+	/usr/bin/python3 bench/plot_work_precision.py $(BENCH_CSV)
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_BUILD_DIR) $(FUZZ_BUILD_DIR)

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 namespace lcp_contact_solver {
 
@@ -40,10 +41,39 @@ bool pyramidModel(const SolverParams& params) {
   return params.friction_model != FrictionModel::kCoulombDisc;
 }
 
-// auto: the disc needs nlgs; a pyramid makes friction an LCP, solved by (boxed) pgs.
+// auto: a pyramid makes friction an LCP, solved by (boxed) pgs; no friction: pgs. The disc,
+// from the work-precision study (docs/BENCHMARKS.md: cold solves of the fc3d set and of the
+// scene problems): nlgs is the fastest down to a residual of 1e-4; from 1e-5 on, nlgs stalls
+// on rank-deficient stacks (BoxesStack, OneObject, box pyramids) where newton reaches 1e-8
+// in milliseconds on up to a few hundred rows, while on larger problems newton's
+// factorizations cost more than apgd's matrix-vector products.
+constexpr double kAutoTightTolerance = 1e-4;  // tolerance below this: newton or apgd
+constexpr int kAutoNewtonMaxRows = 200;       // newton up to this many rows, apgd above
+
 SolverKind resolveKind(SolverKind kind, const SolveContext& ctx) {
   if (kind != SolverKind::kAuto) return kind;
-  return ctx.hasFriction() && !pyramidModel(*ctx.params) ? SolverKind::kNlgs : SolverKind::kPgs;
+  if (!ctx.hasFriction() || pyramidModel(*ctx.params)) return SolverKind::kPgs;
+  const SolverParams& p = *ctx.params;
+  if (p.stopping_rule == StoppingRule::kResidual && p.tolerance < kAutoTightTolerance)
+    return ctx.problem->rowCount() <= kAutoNewtonMaxRows ? SolverKind::kNewton : SolverKind::kApgd;
+  return SolverKind::kNlgs;
+}
+
+// Lemke ends when z0 leaves the basis: exact in exact arithmetic, but on an ill-conditioned
+// W (mass ratios of 1e6, rank deficiency) the basic solution can miss the tolerance by
+// round-off. "converged" means the residual reached the tolerance, for every solver, so
+// that is a numerical failure (the pyramid variant does the same in pyramid.cpp).
+KernelReport honestLemke(KernelReport report, const SolverParams& params) {
+  if (report.status == SolveStatus::kConverged && params.stopping_rule == StoppingRule::kResidual &&
+      report.solver_error > params.tolerance) {
+    report.status = SolveStatus::kNumericalFailure;
+    std::ostringstream message;
+    message << "Lemke's final basis leaves a residual of " << report.solver_error << " > tolerance "
+            << params.tolerance << " (round-off over " << report.iterations
+            << " pivots on an ill-conditioned W); the forces are that basic solution";
+    report.message = message.str();
+  }
+  return report;
 }
 
 KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd& lambda) {
@@ -51,7 +81,8 @@ KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd
   switch (kind) {
     case SolverKind::kPgs:
       return pyramid ? runBoxedGaussSeidel(ctx, lambda) : runProjectedGaussSeidel(ctx, lambda);
-    case SolverKind::kLemke: return pyramid ? runPyramidLemke(ctx, lambda) : runLemke(ctx, lambda);
+    case SolverKind::kLemke:
+      return pyramid ? runPyramidLemke(ctx, lambda) : honestLemke(runLemke(ctx, lambda), *ctx.params);
     case SolverKind::kApgd: return runApgd(ctx, lambda);
     case SolverKind::kNewton: return runNewton(ctx, lambda);
     case SolverKind::kNlgs:

@@ -35,6 +35,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <variant>
 
@@ -236,8 +237,11 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.bilateral_inverse = lu.inverse();
       continue;
     }
-    if (!(D(0, 0) > 0.0))
-      return where + " has W_nn = " + std::to_string(D(0, 0)) + " <= 0; set minW or regularizationTerm";
+    if (!(D(0, 0) > 0.0)) {
+      char value[32];
+      std::snprintf(value, sizeof(value), "%.6g", D(0, 0));  // to_string prints 1e-20 as 0.000000
+      return where + " has W_nn = " + value + " <= 0; set minW or regularizationTerm";
+    }
     blk.inv_nn = 1.0 / D(0, 0);
     if (c.type == ContactType::kFrictionless || blk.mu == 0.0) {
       blk.kind = LocalKind::kNormalOnly;
@@ -456,7 +460,8 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
       lambda = best;
       report.status = SolveStatus::kNumericalFailure;
       report.message = "the iterate became non-finite in sweep " + std::to_string(sweep) +
-                       " (W is probably not positive semidefinite); best iterate returned";
+                       " (W is probably not positive semidefinite, or a diagonal is so small that the force "
+                       "overflows: minW excludes such contacts); best iterate returned";
       return report;
     }
     if (sweep % kRefreshInterval == 0) access.refresh(lambda);

@@ -26,6 +26,11 @@ constexpr double kRoundoffTolerance = 1e-12;
 constexpr double kTieTolerance = 1e-12;
 // Rounds of iterative refinement of the final basic solution.
 constexpr int kRefinementRounds = 2;
+// Largest LCP Lemke takes on: its dense tableau, M and the dense W need 3 × 8 n² bytes
+// (400 MB at this size) and O(n²) per pivot. Larger problems are refused with
+// not_applicable before anything is allocated, so a large problem (or a hostile message
+// with solver=lemke) cannot end in an allocation failure.
+constexpr long long kMaxLemkeSize = 4096;
 
 using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
@@ -334,6 +339,24 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
             << "(contact " << frictional << " has mu = " << mu[frictional]
             << "); use nlgs, mu = 0, or a pyramid friction_model (pyramid4, pyramid8), "
             << "which makes the friction an LCP";
+    report.status = SolveStatus::kNotApplicable;
+    report.message = message.str();
+    return report;
+  }
+
+  long long variables = 0;
+  for (std::size_t c = 0; c < problem.contacts.size(); ++c) {
+    if (!ctx.ignored.empty() && ctx.ignored[c]) continue;
+    variables += problem.contacts[c].type == ContactType::kBilateral ? 2 * problem.contacts[c].rows : 1;
+  }
+  if (variables > kMaxLemkeSize || row_count > kMaxLemkeSize) {
+    std::ostringstream message;
+    message << "Lemke's dense tableau is limited to " << kMaxLemkeSize << " variables and rows; this problem has "
+            << variables << " variables on " << row_count << " rows (it would need about "
+            << 24.0 * static_cast<double>(std::max<long long>(variables, row_count)) *
+                   static_cast<double>(std::max<long long>(variables, row_count)) / 1e9
+            << " GB); use pgs, nlgs, apgd or newton";
+    lambda = Eigen::VectorXd::Zero(row_count);
     report.status = SolveStatus::kNotApplicable;
     report.message = message.str();
     return report;

@@ -637,14 +637,32 @@ Problem fromFclib(const std::string& path, const fclib_local& local) {
 
 }  // namespace
 
-Problem readSiconosDat(const std::string& path) {
-  std::string content = readWholeFile(path);
+namespace {
+
+// The .dat parser proper, on the file's content; `path` names it in messages.
+Problem parseSiconosDat(const std::string& path, std::string content) {
   const bool fc3d = looksLikeFc3d(path, content);
   TokenReader in(path, std::move(content));
   Problem problem = fc3d ? readFc3d(in) : readLcp(in);
   problem.name = baseName(path);
   requireValid(path, problem);
   return problem;  // anything after the data is allowed (Siconos appends solutions, notes)
+}
+
+}  // namespace
+
+Problem readSiconosDat(const std::string& path) { return parseSiconosDat(path, readWholeFile(path)); }
+
+Problem readSiconosDat(std::istream& stream, const std::string& name) {
+  std::string content;
+  char buffer[65536];
+  while (stream.read(buffer, sizeof(buffer)) || stream.gcount() > 0) {
+    if (content.size() + static_cast<std::size_t>(stream.gcount()) > kMaxFileBytes)
+      fail(name, "input is too large (more than " + std::to_string(kMaxFileBytes) + " bytes)");
+    content.append(buffer, static_cast<std::size_t>(stream.gcount()));
+  }
+  if (stream.bad()) fail(name, "read error");
+  return parseSiconosDat(name, std::move(content));
 }
 
 Problem readFclibHdf5(const std::string& path) {

@@ -104,7 +104,7 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
     if (!ignored.empty() && ignored[i]) continue;
     switch (c.type) {
       case ContactType::kFrictional: {
-        const double en = l[0] - std::max(0.0, l[0] - u[0]);
+        const double en = std::min(l[0], u[0]);  // = l − max(0, l − u), without cancellation
         const Eigen::Vector2d lt(l[1], l[2]);
         const Eigen::Vector2d et =
             lt - projectOntoPolygon(polygon, lt - Eigen::Vector2d(u[1], u[2]), mu[i] * std::max(l[0], 0.0));
@@ -112,7 +112,7 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
         break;
       }
       case ContactType::kFrictionless: {
-        const double e = l[0] - std::max(0.0, l[0] - u[0]);
+        const double e = std::min(l[0], u[0]);
         sum += e * e;
         break;
       }
@@ -202,6 +202,21 @@ KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
   }
   const int N = static_cast<int>(columns.size());
+  // The dense W, W P and M below: refuse sizes runLemke would refuse anyway (lemke.cpp),
+  // before allocating them.
+  constexpr int kMaxPyramidLemkeSize = 4096;
+  if (N > kMaxPyramidLemkeSize || n > kMaxPyramidLemkeSize) {
+    lambda.setZero(n);
+    KernelReport report;
+    report.status = SolveStatus::kNotApplicable;
+    report.friction_model = params.friction_model;
+    report.message = "Lemke's dense tableau is limited to " + std::to_string(kMaxPyramidLemkeSize) +
+                     " variables and rows; the " + std::string(frictionModelName(params.friction_model)) +
+                     " friction LCP has " + std::to_string(N) + " variables on " + std::to_string(n) +
+                     " rows; use pgs (boxed Gauss-Seidel on the same pyramid)";
+    report.solver_error = ctx.residual(lambda);
+    return report;
+  }
 
   // M = Pᵀ (W + r I) P + G, q = Pᵀ d_free; P has at most two entries per column.
   Eigen::MatrixXd W = toDense(problem.W);

@@ -54,14 +54,20 @@ double contactErrorSquared(const Contact& c, double mu, const double* lambda, co
     case ContactType::kFrictional: {
       // De Saxcé's modified velocity makes the Coulomb law a cone complementarity problem.
       const double dt = norm2(d[1], d[2]);
-      double x[3] = {lambda[0] - (d[0] + mu * dt), lambda[1] - d[1], lambda[2] - d[2]};
+      const double dn = d[0] + mu * dt;
+      double x[3] = {lambda[0] - dn, lambda[1] - d[1], lambda[2] - d[2]};
+      // x inside the cone: Proj(x) = x and e = λ − x is the modified velocity itself. Use it
+      // as is: λ − (λ − d) cancels to 0 when |d| is below λ's rounding (forces of 1e6 N,
+      // velocities of 1e-10 m), which would report an exact solution that is not one.
+      if (norm2(x[1], x[2]) <= mu * x[0]) return dn * dn + d[1] * d[1] + d[2] * d[2];
       projectOntoCone(mu, x);
       double sum = 0.0;
       for (int k = 0; k < 3; ++k) sum += (lambda[k] - x[k]) * (lambda[k] - x[k]);
       return sum;
     }
     case ContactType::kFrictionless: {
-      const double e = lambda[0] - std::max(0.0, lambda[0] - d[0]);
+      // λ − max(0, λ − d) = min(λ, d), written so that it does not cancel (see above).
+      const double e = std::min(lambda[0], d[0]);
       return e * e;
     }
     case ContactType::kBilateral: {

@@ -97,6 +97,12 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
 std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Problem* problem,
                          std::vector<ContactFrame>* frames) {
   if (msg.contacts.empty()) return "the contact array is empty";
+  // Every contact has at least one row: refuse an array over the limit before allocating
+  // anything per contact (a hostile array of 10⁶ contacts costs one comparison).
+  const std::int64_t limit = max_rows > 0 ? max_rows : kHardRowLimit;
+  if (static_cast<std::int64_t>(msg.contacts.size()) > limit)
+    return "the array has " + std::to_string(msg.contacts.size()) + " contacts, more than the row limit of " +
+           std::to_string(limit);
   problem->contacts.resize(msg.contacts.size());
   frames->resize(msg.contacts.size());
   std::set<std::int64_t> ids;
@@ -109,7 +115,6 @@ std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Proble
     if (!error.empty()) return contactName(i, c.id) + " " + error;
     rows += problem->contacts[i].rows;
   }
-  const std::int64_t limit = max_rows > 0 ? max_rows : kHardRowLimit;
   if (rows > limit)
     return "the contacts have " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(limit);
   problem->d_free.resize(rows);
@@ -203,7 +208,7 @@ bool finite(const geometry_msgs::Point& p) {
 }  // namespace
 
 void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2) {
-  tangentsFromNormal(normal, tangent1, tangent2);
+  lcs::tangentsFromNormal(normal, tangent1, tangent2);
 }
 
 std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame) {

@@ -4,6 +4,7 @@
 
 #include "lcp_contact_solver/core/problem.h"
 
+#include <istream>
 #include <stdexcept>
 #include <string>
 
@@ -19,6 +20,9 @@ class ProblemFileError : public std::runtime_error {
 // (`3`, nc, matrix, q, mu) becomes nc frictional contacts with their own μ. Dense storage
 // gives a dense W, sparse-block storage a BlockSparseMatrix.
 Problem readSiconosDat(const std::string& path);
+// The same from a stream (a pipe, a string in memory, the fuzzer's bytes); `name` stands for
+// the path in messages and in Problem::name. Reads at most 2 GiB.
+Problem readSiconosDat(std::istream& stream, const std::string& name);
 
 // FCLIB local problem (fclib_read_local) in 3D: frictional contacts with their own μ.
 Problem readFclibHdf5(const std::string& path);

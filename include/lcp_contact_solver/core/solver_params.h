@@ -9,7 +9,9 @@
 namespace lcp_contact_solver {
 
 enum class SolverKind {
-  kAuto,       // friction (μ > 0): nlgs with the disc model, pgs with a pyramid; else pgs
+  kAuto,       // friction (μ > 0) with the disc: nlgs for tolerance >= 1e-4; below, newton
+               // up to 200 rows and apgd above (stopping_rule residual; docs/BENCHMARKS.md).
+               // Friction with a pyramid: pgs. No friction: pgs.
   kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); with friction
                // only for a pyramid friction_model (boxed PGS)
   kNlgs,       // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)

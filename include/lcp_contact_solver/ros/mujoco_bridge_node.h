@@ -1,0 +1,174 @@
+// The MuJoCo bridge (`mujoco_bridge`): MuJoCo beside the contact solver node.
+//
+// Each step: MuJoCo's forward pipeline up to its constraint problem (forwardToConstraints) →
+// the problem (scene/mujoco_adapter.h: W = efc_AR, d_free = efc_b over the contact, limit
+// and equality rows) → /clock, then `contacts` and `compliance` with the step's stamp →
+// wait for `constraint_forces` with that stamp (at most ~force_timeout wall seconds) → then
+//
+//   cross_check: MuJoCo steps with its own forces (its solver ran in the same step), ours are
+//                compared with efc_force and the difference is reported;
+//   drive:       MuJoCo steps with ours in place of its solver: qacc = qacc_smooth + M⁻¹ Jᵀ f,
+//                then MuJoCo's semi-implicit Euler (mj_Euler). With ~compare its solver
+//                also runs, only to report the difference.
+//
+// Every step with rows publishes a `~step_report` (diagnostic_msgs/DiagnosticStatus, values
+// by key: step, time, contacts, rows, our residual, MuJoCo's and our solve time, max
+// abs/rel difference per contact state, penetration, energy); ~print_summary prints status
+// lines and a final summary on stdout. When the forces do not come (timeout, a solve that
+// gave none, forces that do not fit), cross_check skips the comparison and drive falls back
+// to MuJoCo's own solver for the step; both are counted and warned about.
+#pragma once
+
+#include "lcp_contact_solver/scene/mujoco_adapter.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <lcp_contact_solver/Compliance.h>
+#include <lcp_contact_solver/ConstraintForces.h>
+#include <lcp_contact_solver/ContactArray.h>
+#include <lcp_contact_solver/SolverStats.h>
+#include <ros/ros.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <string>
+
+namespace lcp_contact_solver_ros {
+
+namespace lcs = ::lcp_contact_solver;
+
+struct MujocoBridgeSettings {
+  std::string model = "/usr/share/mujoco/model/humanoid/humanoid.xml";  // MJCF or MJB
+  std::string mode = "cross_check";  // cross_check | drive
+  std::string cone = "pyramidal";    // pyramidal | elliptic | model (keep the model's)
+  // MuJoCo's own solver (cross_check, and drive with ~compare). The defaults run its PGS to
+  // its fixed point, so a difference is ours: tolerance 0 runs every iteration.
+  std::string mujoco_solver = "pgs";  // pgs | cg | newton | model
+  int mujoco_iterations = 3000;       // <= 0: the model's
+  double mujoco_tolerance = 0.0;      // < 0: the model's
+  bool compare = true;                // drive: also run MuJoCo's solver to report the difference
+  int steps = 0;                      // steps to run; 0 = for ever (or ~duration)
+  double duration = 0.0;              // simulated s to run when steps = 0; 0 = for ever
+  double dt = 0.0;                    // MuJoCo's timestep override (s); 0 = the model's
+  double rate_factor = 1.0;           // simulated s per wall s; 0 = as fast as possible
+  double force_timeout = 1.0;         // wall s to wait for the forces of a step; <= 0: for ever
+  double wait_for_solver = 30.0;      // wall s to wait for the solver's connections; <= 0: for ever
+  int min_report_subscribers = 0;     // also wait for this many ~step_report subscribers (tests)
+  std::string frame_id = "world";     // frame of the contacts (MuJoCo's world frame)
+  bool publish_clock = true;          // publish /clock with the simulated time
+  bool include_limits = true;         // joint/tendon limits as unilateral rows
+  bool include_equalities = true;     // equality constraints as bilateral rows
+  std::string storage = "auto";       // W: auto | dense | block_sparse
+  int dense_max_rows = 200;           // auto: block-sparse above this many rows
+  double max_rel_warn = 1e-6;         // cross_check: warn when the relative difference exceeds it
+  bool print_summary = false;         // status lines and the final summary on stdout (demo)
+  double status_period = 1.0;         // simulated s between status lines
+};
+
+// Reads every private parameter present over the defaults. Empty string, or a sentence naming
+// the parameter of the wrong type or value.
+std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* settings);
+
+// The messages of one step's problem (positions and directions in MuJoCo's world frame).
+lcp_contact_solver::ContactArray toContactArrayMsg(const lcs::scene::MujocoProblem& problem,
+                                                   const lcs::scene::MujocoWorld& world,
+                                                   const std_msgs::Header& header);
+lcp_contact_solver::Compliance toComplianceMsg(const lcs::scene::MujocoProblem& problem,
+                                               const std_msgs::Header& header);
+// λ (problem rows) from the solver's forces for this problem; empty string or why they do not fit.
+std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces,
+                            const lcs::scene::MujocoProblem& problem, Eigen::VectorXd* lambda);
+
+struct MujocoBridgeCounters {
+  std::int64_t steps = 0;
+  std::int64_t steps_with_rows = 0;
+  std::int64_t forces_applied = 0;   // steps whose forces came (drive: integrated with them)
+  std::int64_t force_timeouts = 0;
+  std::int64_t solver_failures = 0;  // the solver's stats said it gave no forces
+  std::int64_t bad_forces = 0;       // forces that did not fit the step
+  std::int64_t extract_errors = 0;   // steps whose MuJoCo rows could not be converted
+  std::int64_t fallbacks = 0;        // drive: steps integrated with MuJoCo's own solver
+  std::int64_t compared = 0;         // steps compared with MuJoCo's forces
+  std::int64_t over_warn = 0;        // compared steps above ~max_rel_warn
+  std::int64_t misses() const { return force_timeouts + solver_failures + bad_forces; }
+};
+
+// Figures of the run (the summary).
+struct MujocoBridgeTotals {
+  int max_contacts = 0, last_contacts = 0, max_rows = 0;
+  double max_residual = 0.0, last_residual = 0.0;
+  double max_abs_diff = 0.0, max_rel_diff = 0.0;
+  double state_max_rel[4] = {0, 0, 0, 0};  // per contact state (open, stick, slip, ignored)
+  std::int64_t state_count[4] = {0, 0, 0, 0};
+  double max_penetration = 0.0, last_penetration = 0.0;
+  double first_energy = 0.0, last_energy = 0.0;
+  double our_solve_time = 0.0;     // s, summed (from the solver's stats)
+  std::int64_t our_solves = 0;
+  double mujoco_solve_time = 0.0;  // s, summed
+  std::int64_t mujoco_solves = 0;
+};
+
+class MujocoBridgeNode {
+ public:
+  // Reads the parameters and loads the model. Throws std::invalid_argument for a bad
+  // parameter or a model that does not load.
+  MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);
+  ~MujocoBridgeNode();
+
+  // Waits for the solver, then steps until ~steps (or shutdown). False when the solver never
+  // connected or ROS shut down first.
+  bool run();
+  // One step (public for tests).
+  void step();
+
+  void writeSummary(std::ostream& out) const;
+  const MujocoBridgeCounters& counters() const { return counters_; }
+  const MujocoBridgeTotals& totals() const { return totals_; }
+
+ private:
+  enum class Outcome { kForces, kTimeout, kSolverFailed, kShutdown };
+
+  void onForces(const lcp_contact_solver::ConstraintForces::ConstPtr& msg);
+  void onSolverStats(const lcp_contact_solver::SolverStats::ConstPtr& msg);
+  bool waitForSolver();
+  Outcome waitForForces(const ros::Time& stamp);
+  void publishClock(const ros::Time& stamp);
+  void pace();
+  void statusLine(int contacts, int rows);
+  ros::Time stampOf(std::int64_t step) const;
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle pnh_;
+  MujocoBridgeSettings settings_;
+  std::unique_ptr<lcs::scene::MujocoWorld> world_;
+  lcs::scene::MujocoExtractOptions extract_;
+  bool drive_ = false;
+  double dt_ = 0.005;
+
+  ros::Publisher contacts_pub_;
+  ros::Publisher compliance_pub_;
+  ros::Publisher clock_pub_;
+  ros::Publisher report_pub_;
+  ros::Subscriber forces_sub_;
+  ros::Subscriber stats_sub_;
+
+  bool awaiting_ = false;
+  ros::Time awaiting_stamp_;
+  lcp_contact_solver::ConstraintForces::ConstPtr received_;
+  std::string solver_failure_;
+  lcp_contact_solver::SolverStats::ConstPtr last_stats_;  // of awaiting_stamp_, if it came
+
+  MujocoBridgeCounters counters_;
+  MujocoBridgeTotals totals_;
+  ros::WallTime run_start_;
+  double run_wall_time_ = 0.0;
+  double next_status_time_ = 0.0;
+  bool header_printed_ = false;
+  // Over the current status period.
+  double period_max_rel_ = 0.0;
+  double period_max_residual_ = 0.0;
+};
+
+}  // namespace lcp_contact_solver_ros

@@ -1,0 +1,591 @@
+#include "lcp_contact_solver/ros/mujoco_bridge_node.h"
+
+#include "lcp_contact_solver/ros/msg_conversion.h"
+
+#include <diagnostic_msgs/KeyValue.h>
+#include <ros/callback_queue.h>
+#include <rosgraph_msgs/Clock.h>
+
+#include <boost/make_shared.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace lcp_contact_solver_ros {
+
+namespace {
+
+namespace scene = lcs::scene;
+using lcp_contact_solver::ContactPoint;
+
+constexpr double kSpinSlice = 0.01;  // wall s: callbacks are served in slices this long while waiting
+
+template <typename T>
+std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* value, const char* expected) {
+  if (!pnh.hasParam(name)) return "";
+  if (!pnh.getParam(name, *value)) return "parameter " + pnh.resolveName(name) + " must be " + expected;
+  return "";
+}
+
+bool finite(double v) { return std::isfinite(v); }
+
+std::string validate(const MujocoBridgeSettings& s) {
+  int dummy = 0;
+  std::string why;
+  if (s.model.empty()) return "parameter model must name an MJCF file";
+  if (s.mode != "cross_check" && s.mode != "drive") return "parameter mode must be cross_check or drive";
+  if (s.cone != "model" && !scene::parseMujocoCone(s.cone, &dummy, &why)) return "parameter cone: " + why + " or model";
+  if (s.mujoco_solver != "model" && !scene::parseMujocoSolver(s.mujoco_solver, &dummy, &why))
+    return "parameter mujoco_solver: " + why + " or model";
+  if (!finite(s.mujoco_tolerance)) return "parameter mujoco_tolerance must be finite (< 0 keeps the model's)";
+  if (s.steps < 0) return "parameter steps must be >= 0 (0 runs for ever, or for ~duration)";
+  if (!finite(s.duration) || s.duration < 0.0) return "parameter duration must be >= 0 (0 runs for ever)";
+  if (!finite(s.dt) || s.dt < 0.0) return "parameter dt must be >= 0 (0 keeps the model's timestep)";
+  if (!finite(s.rate_factor) || s.rate_factor < 0.0) return "parameter rate_factor must be >= 0 (0 runs as fast as possible)";
+  if (!finite(s.force_timeout)) return "parameter force_timeout must be finite (<= 0 waits for ever)";
+  if (!finite(s.wait_for_solver)) return "parameter wait_for_solver must be finite (<= 0 waits for ever)";
+  if (s.min_report_subscribers < 0) return "parameter min_report_subscribers must be >= 0";
+  if (s.frame_id.empty()) return "parameter frame_id must not be empty";
+  if (s.storage != "auto" && s.storage != "dense" && s.storage != "block_sparse")
+    return "parameter storage must be auto, dense or block_sparse";
+  if (s.dense_max_rows < 0) return "parameter dense_max_rows must be >= 0";
+  if (!finite(s.max_rel_warn) || s.max_rel_warn <= 0.0) return "parameter max_rel_warn must be > 0";
+  if (!finite(s.status_period) || s.status_period <= 0.0) return "parameter status_period must be > 0";
+  return "";
+}
+
+MujocoBridgeSettings loadOrThrow(const ros::NodeHandle& pnh) {
+  MujocoBridgeSettings settings;
+  const std::string error = loadMujocoBridgeSettings(pnh, &settings);
+  if (!error.empty()) throw std::invalid_argument(error);
+  return settings;
+}
+
+std::unique_ptr<scene::MujocoWorld> loadWorld(const MujocoBridgeSettings& s) {
+  scene::MujocoOptions options;
+  if (s.cone != "model") options.cone = s.cone;
+  if (s.mujoco_solver != "model") options.solver = s.mujoco_solver;
+  if (s.mujoco_iterations > 0) options.iterations = s.mujoco_iterations;
+  if (s.mujoco_tolerance >= 0.0) options.tolerance = s.mujoco_tolerance;
+  if (s.dt > 0.0) options.timestep = s.dt;
+  std::string error;
+  auto world = scene::MujocoWorld::load(s.model, options, &error);
+  if (!world) throw std::invalid_argument("parameter model: " + error);
+  if (s.mode == "drive" && world->model()->opt.integrator != mjINT_EULER)
+    throw std::invalid_argument("parameter model: " + s.model +
+                                " does not use MuJoCo's Euler integrator, which drive mode needs");
+  return world;
+}
+
+geometry_msgs::Point point(const Eigen::Vector3d& v) {
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+geometry_msgs::Vector3 vector(const Eigen::Vector3d& v) {
+  geometry_msgs::Vector3 p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+std::string stampText(const ros::Time& stamp) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << stamp.toSec() << " s";
+  return out.str();
+}
+
+void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value) {
+  diagnostic_msgs::KeyValue kv;
+  kv.key = key;
+  kv.value = value;
+  status->values.push_back(kv);
+}
+
+void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, double value) {
+  std::ostringstream out;
+  out << std::setprecision(17) << value;
+  addValue(status, key, out.str());
+}
+
+const char* const kStateNames[4] = {"open", "stick", "slip", "ignored"};
+
+}  // namespace
+
+std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
+  for (const std::string& error : {
+           readParam(pnh, "model", &s->model, "a string"), readParam(pnh, "mode", &s->mode, "a string"),
+           readParam(pnh, "cone", &s->cone, "a string"),
+           readParam(pnh, "mujoco_solver", &s->mujoco_solver, "a string"),
+           readParam(pnh, "mujoco_iterations", &s->mujoco_iterations, "an integer"),
+           readParam(pnh, "mujoco_tolerance", &s->mujoco_tolerance, "a number"),
+           readParam(pnh, "compare", &s->compare, "true or false"),
+           readParam(pnh, "steps", &s->steps, "an integer"),
+           readParam(pnh, "duration", &s->duration, "a number"), readParam(pnh, "dt", &s->dt, "a number"),
+           readParam(pnh, "rate_factor", &s->rate_factor, "a number"),
+           readParam(pnh, "force_timeout", &s->force_timeout, "a number"),
+           readParam(pnh, "wait_for_solver", &s->wait_for_solver, "a number"),
+           readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
+           readParam(pnh, "frame_id", &s->frame_id, "a string"),
+           readParam(pnh, "publish_clock", &s->publish_clock, "true or false"),
+           readParam(pnh, "include_limits", &s->include_limits, "true or false"),
+           readParam(pnh, "include_equalities", &s->include_equalities, "true or false"),
+           readParam(pnh, "storage", &s->storage, "a string"),
+           readParam(pnh, "dense_max_rows", &s->dense_max_rows, "an integer"),
+           readParam(pnh, "max_rel_warn", &s->max_rel_warn, "a number"),
+           readParam(pnh, "print_summary", &s->print_summary, "true or false"),
+           readParam(pnh, "status_period", &s->status_period, "a number")}) {
+    if (!error.empty()) return error;
+  }
+  return validate(*s);
+}
+
+// ---- messages -------------------------------------------------------------------------------
+
+lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& problem, const scene::MujocoWorld& world,
+                                                   const std_msgs::Header& header) {
+  lcp_contact_solver::ContactArray msg;
+  msg.header = header;
+  const std::vector<int> offsets = problem.problem.rowOffsets();
+  msg.contacts.resize(problem.entries.size());
+  for (std::size_t i = 0; i < problem.entries.size(); ++i) {
+    const scene::MujocoEntry& e = problem.entries[i];
+    const lcs::Contact& c = problem.problem.contacts[i];
+    ContactPoint& p = msg.contacts[i];
+    p.id = c.id;
+    p.body_a = world.bodyName(e.body_a);
+    p.body_b = world.bodyName(e.body_b);
+    p.position = point(e.position);
+    p.normal = vector(e.normal);
+    if (e.kind == scene::MujocoRowKind::kElliptic) {  // MuJoCo's own frame, so the rows stay its rows
+      p.tangent1 = vector(e.tangent1);
+      p.tangent2 = vector(e.tangent2);
+    }
+    for (int r = offsets[i]; r < offsets[i + 1]; ++r) p.d_free.push_back(problem.problem.d_free[r]);
+    switch (c.type) {
+      case lcs::ContactType::kFrictional:
+        p.type = ContactPoint::FRICTIONAL;
+        p.mu = c.mu;
+        break;
+      case lcs::ContactType::kFrictionless:
+        p.type = ContactPoint::FRICTIONLESS;
+        p.mu = 0.0;
+        break;
+      case lcs::ContactType::kBilateral:
+        p.type = ContactPoint::BILATERAL;
+        p.mu = 0.0;
+        break;
+    }
+    p.rows = static_cast<std::uint32_t>(c.rows);
+  }
+  return msg;
+}
+
+lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& problem, const std_msgs::Header& header) {
+  lcp_contact_solver::Compliance msg = toComplianceMsg(problem.problem.W);
+  msg.header = header;
+  return msg;
+}
+
+std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, const scene::MujocoProblem& problem,
+                            Eigen::VectorXd* lambda) {
+  const std::size_t n = problem.problem.contacts.size();
+  if (forces.forces.size() != n)
+    return std::to_string(forces.forces.size()) + " forces for " + std::to_string(n) + " contacts";
+  const std::vector<int> offsets = problem.problem.rowOffsets();
+  lambda->resize(offsets.back());
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& f = forces.forces[i];
+    if (f.id != problem.problem.contacts[i].id)
+      return "force " + std::to_string(i) + " has id " + std::to_string(f.id) + ", the contact " +
+             std::to_string(problem.problem.contacts[i].id);
+    const int rows = offsets[i + 1] - offsets[i];
+    if (static_cast<int>(f.lambda.size()) != rows)
+      return "force " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) + " rows, the contact " +
+             std::to_string(rows);
+    for (int r = 0; r < rows; ++r) {
+      if (!std::isfinite(f.lambda[r])) return "force " + std::to_string(i) + " is not finite";
+      (*lambda)[offsets[i] + r] = f.lambda[r];
+    }
+  }
+  return "";
+}
+
+// ---- node --------------------------------------------------------------------------------
+
+MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
+    : nh_(nh), pnh_(pnh), settings_(loadOrThrow(pnh)), world_(loadWorld(settings_)) {
+  drive_ = settings_.mode == "drive";
+  dt_ = world_->model()->opt.timestep;
+  extract_.include_limits = settings_.include_limits;
+  extract_.include_equalities = settings_.include_equalities;
+  extract_.dense_max_rows = settings_.dense_max_rows;
+  if (settings_.storage == "dense") extract_.storage = scene::MujocoExtractOptions::Storage::kDense;
+  if (settings_.storage == "block_sparse") extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;
+
+  contacts_pub_ = nh_.advertise<lcp_contact_solver::ContactArray>("contacts", 10);
+  compliance_pub_ = nh_.advertise<lcp_contact_solver::Compliance>("compliance", 10);
+  if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  report_pub_ = pnh_.advertise<diagnostic_msgs::DiagnosticStatus>("step_report", 100);
+  forces_sub_ = nh_.subscribe("constraint_forces", 10, &MujocoBridgeNode::onForces, this);
+  stats_sub_ = nh_.subscribe("contact_solver/stats", 10, &MujocoBridgeNode::onSolverStats, this);
+  next_status_time_ = settings_.status_period;
+  if (settings_.steps == 0 && settings_.duration > 0.0)
+    settings_.steps = std::max(1, static_cast<int>(std::llround(settings_.duration / dt_)));
+}
+
+MujocoBridgeNode::~MujocoBridgeNode() = default;
+
+ros::Time MujocoBridgeNode::stampOf(std::int64_t step) const {
+  ros::Time stamp;
+  stamp.fromNSec(static_cast<std::uint64_t>(std::llround(static_cast<double>(step) * dt_ * 1e9)));
+  return stamp;
+}
+
+void MujocoBridgeNode::onForces(const lcp_contact_solver::ConstraintForces::ConstPtr& msg) {
+  if (awaiting_ && msg->header.stamp == awaiting_stamp_) received_ = msg;
+}
+
+void MujocoBridgeNode::onSolverStats(const lcp_contact_solver::SolverStats::ConstPtr& msg) {
+  if (!awaiting_ || msg->header.stamp != awaiting_stamp_) return;
+  last_stats_ = msg;
+  if (received_) return;
+  if (!msg->success)
+    solver_failure_ = msg->status + (msg->message.empty() ? "" : ": " + msg->message);
+  else if (!msg->forces_published)
+    solver_failure_ = "the solver did not publish the forces";
+}
+
+bool MujocoBridgeNode::waitForSolver() {
+  auto connected = [this] {
+    return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 &&
+           forces_sub_.getNumPublishers() > 0 &&
+           report_pub_.getNumSubscribers() >= static_cast<std::uint32_t>(settings_.min_report_subscribers);
+  };
+  const bool forever = settings_.wait_for_solver <= 0.0;
+  const ros::WallTime start = ros::WallTime::now();
+  bool told = false;
+  while (ros::ok() && !connected()) {
+    const double waited = (ros::WallTime::now() - start).toSec();
+    if (!forever && waited >= settings_.wait_for_solver) break;
+    if (!told && waited > 1.0) {
+      ROS_INFO_STREAM("Waiting for the contact solver on " << contacts_pub_.getTopic() << " / "
+                                                          << forces_sub_.getTopic());
+      told = true;
+    }
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(kSpinSlice));
+  }
+  if (!connected()) {
+    if (ros::ok())
+      ROS_FATAL_STREAM("No contact solver within " << settings_.wait_for_solver << " s: " << contacts_pub_.getTopic()
+                                                   << " has " << contacts_pub_.getNumSubscribers() << " subscribers, "
+                                                   << forces_sub_.getTopic() << " "
+                                                   << forces_sub_.getNumPublishers() << " publishers");
+    return false;
+  }
+  return true;
+}
+
+bool MujocoBridgeNode::run() {
+  const mjModel* m = world_->model();
+  ROS_INFO_STREAM("MuJoCo " << mj_versionString() << ": " << settings_.model << " (nq " << m->nq << ", nv " << m->nv
+                            << "), cone " << scene::mujocoConeName(m->opt.cone) << ", dt " << dt_ << " s, mode "
+                            << settings_.mode << ", MuJoCo solver " << scene::mujocoSolverName(m->opt.solver)
+                            << " (" << m->opt.iterations << " iterations, tolerance " << m->opt.tolerance << ")");
+  if (settings_.publish_clock) publishClock(stampOf(0));
+  if (!waitForSolver()) return false;
+  run_start_ = ros::WallTime::now();
+  while (ros::ok() && (settings_.steps == 0 || counters_.steps < settings_.steps)) {
+    step();
+    pace();
+  }
+  run_wall_time_ = (ros::WallTime::now() - run_start_).toSec();
+  std::ostringstream summary;
+  writeSummary(summary);
+  if (settings_.print_summary) {  // the table on stdout, one line in the log
+    std::cout << summary.str() << std::flush;
+    ROS_INFO_STREAM("MuJoCo bridge " << (ros::ok() ? "finished" : "interrupted") << ": " << counters_.steps
+                                     << " steps, " << counters_.misses() << " without the solver's forces");
+  } else {
+    ROS_INFO_STREAM("MuJoCo bridge " << (ros::ok() ? "finished" : "interrupted") << "\n" << summary.str());
+  }
+  return ros::ok();
+}
+
+void MujocoBridgeNode::step() {
+  mjModel* m = world_->model();
+  mjData* d = world_->data();
+  const bool mujoco_solves = !drive_ || settings_.compare;
+  double mujoco_time = 0.0;
+  scene::forwardToConstraints(m, d, mujoco_solves, &mujoco_time);
+  if (mujoco_solves && d->nefc > 0) {
+    totals_.mujoco_solve_time += mujoco_time;
+    ++totals_.mujoco_solves;
+  }
+  const double energy = scene::totalEnergy(m, d);
+  const double penetration = scene::maxPenetration(d);
+  if (counters_.steps == 0) totals_.first_energy = energy;
+  totals_.last_energy = energy;
+  totals_.last_penetration = penetration;
+  totals_.max_penetration = std::max(totals_.max_penetration, penetration);
+
+  const ros::Time stamp = stampOf(counters_.steps);
+  publishClock(stamp);
+
+  scene::MujocoProblem mp;
+  const std::string extract_error = scene::extractProblem(m, d, extract_, &mp);
+  bool ours_applied = false;
+  if (!extract_error.empty()) {
+    ++counters_.extract_errors;
+    ROS_ERROR_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": " << extract_error
+                                              << "; MuJoCo's own solver takes this step");
+  } else if (!mp.problem.contacts.empty()) {
+    ++counters_.steps_with_rows;
+    totals_.last_contacts = mp.ncon;
+    totals_.max_contacts = std::max(totals_.max_contacts, mp.ncon);
+    totals_.max_rows = std::max(totals_.max_rows, mp.problem.rowCount());
+
+    std_msgs::Header header;
+    header.stamp = stamp;
+    header.frame_id = settings_.frame_id;
+    auto contacts = boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
+    auto compliance = boost::make_shared<lcp_contact_solver::Compliance>(toComplianceMsg(mp, header));
+    awaiting_ = true;
+    awaiting_stamp_ = stamp;
+    received_.reset();
+    last_stats_.reset();
+    solver_failure_.clear();
+    compliance_pub_.publish(compliance);
+    contacts_pub_.publish(contacts);
+    const Outcome outcome = waitForForces(stamp);
+
+    diagnostic_msgs::DiagnosticStatus report;
+    report.name = "mujoco_bridge";
+    report.hardware_id = settings_.model;
+    addValue(&report, "step", static_cast<double>(counters_.steps));
+    addValue(&report, "time", d->time);
+    addValue(&report, "mode", settings_.mode);
+    addValue(&report, "cone", scene::mujocoConeName(m->opt.cone));
+    addValue(&report, "contacts", mp.ncon);
+    addValue(&report, "entries", static_cast<double>(mp.entries.size()));
+    addValue(&report, "rows", mp.problem.rowCount());
+    addValue(&report, "dropped_rows", static_cast<double>(mp.dropped_rows.size()));
+    addValue(&report, "penetration", penetration);
+    addValue(&report, "energy", energy);
+    if (mujoco_solves) addValue(&report, "mujoco_solve_time", mujoco_time);
+
+    Eigen::VectorXd lambda;
+    std::string problem_text;
+    switch (outcome) {
+      case Outcome::kForces: {
+        problem_text = toProblemForces(*received_, mp, &lambda);
+        if (!problem_text.empty()) {
+          ++counters_.bad_forces;
+          problem_text = "forces do not fit: " + problem_text;
+        }
+        break;
+      }
+      case Outcome::kTimeout:
+        ++counters_.force_timeouts;
+        problem_text = "no forces within " + std::to_string(settings_.force_timeout) + " s";
+        break;
+      case Outcome::kSolverFailed:
+        ++counters_.solver_failures;
+        problem_text = "the solver gave no forces (" + solver_failure_ + ")";
+        break;
+      case Outcome::kShutdown:
+        problem_text = "shutdown";
+        break;
+    }
+    if (problem_text.empty()) {
+      ++counters_.forces_applied;
+      const double residual = scene::problemResidual(mp, lambda);
+      totals_.last_residual = residual;
+      totals_.max_residual = std::max(totals_.max_residual, residual);
+      period_max_residual_ = std::max(period_max_residual_, residual);
+      addValue(&report, "forces", "received");
+      addValue(&report, "residual", residual);
+      if (last_stats_) {
+        addValue(&report, "iterations", last_stats_->iterations);
+        addValue(&report, "solve_time", last_stats_->solve_time);
+        addValue(&report, "solver", last_stats_->solver);
+        totals_.our_solve_time += last_stats_->solve_time;
+        ++totals_.our_solves;
+      }
+      if (mujoco_solves) {
+        std::vector<lcs::ContactState> states;
+        for (const auto& f : received_->forces) states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, 3)));
+        const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
+        ++counters_.compared;
+        totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
+        totals_.max_rel_diff = std::max(totals_.max_rel_diff, cmp.max_rel);
+        period_max_rel_ = std::max(period_max_rel_, cmp.max_rel);
+        addValue(&report, "max_abs_diff", cmp.max_abs);
+        addValue(&report, "max_rel_diff", cmp.max_rel);
+        addValue(&report, "force_scale", cmp.scale);
+        for (int k = 0; k < 4; ++k) {
+          totals_.state_count[k] += cmp.state_count[k];
+          if (cmp.state_count[k] == 0) continue;
+          totals_.state_max_rel[k] = std::max(totals_.state_max_rel[k], cmp.state_max_abs[k] / cmp.scale);
+          addValue(&report, std::string("max_rel_diff_") + kStateNames[k], cmp.state_max_abs[k] / cmp.scale);
+          addValue(&report, std::string("entries_") + kStateNames[k], cmp.state_count[k]);
+        }
+        if (cmp.max_rel > settings_.max_rel_warn) {
+          ++counters_.over_warn;
+          if (mp.pyramidal)  // an LCP with a unique solution: a difference means an inexact solve
+            ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": our forces differ from MuJoCo's by "
+                                                     << cmp.max_rel << " (relative) on the pyramidal LCP");
+        }
+        report.level = cmp.max_rel > settings_.max_rel_warn && mp.pyramidal ? diagnostic_msgs::DiagnosticStatus::WARN
+                                                                          : diagnostic_msgs::DiagnosticStatus::OK;
+      }
+      if (drive_) {
+        scene::applyConstraintForces(m, d, mp.toEfcForce(lambda));
+        ours_applied = true;
+      }
+      std::ostringstream message;
+      message << mp.ncon << " contacts, " << mp.problem.rowCount() << " rows, residual " << residual;
+      report.message = message.str();
+    } else {
+      report.level = diagnostic_msgs::DiagnosticStatus::WARN;
+      report.message = problem_text;
+      addValue(&report, "forces", problem_text);
+      if (outcome != Outcome::kShutdown)
+        ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": " << problem_text
+                                                 << (drive_ ? "; MuJoCo's own solver takes this step" : ""));
+    }
+    awaiting_ = false;
+    received_.reset();
+    report_pub_.publish(report);
+  }
+
+  // Drive without our forces for a step with constraints: MuJoCo's solver decides it.
+  if (drive_ && !ours_applied && d->nefc > 0) {
+    if (!mujoco_solves) mj_fwdConstraint(m, d);
+    ++counters_.fallbacks;
+  }
+  const std::string error = scene::integrateEuler(m, d);
+  if (!error.empty()) throw std::runtime_error(error);  // checked at load; kept as a guard
+  ++counters_.steps;
+  statusLine(mp.ncon, mp.problem.rowCount());
+}
+
+MujocoBridgeNode::Outcome MujocoBridgeNode::waitForForces(const ros::Time& stamp) {
+  const bool forever = settings_.force_timeout <= 0.0;
+  const ros::WallTime start = ros::WallTime::now();
+  ros::WallTime next_note = start + ros::WallDuration(5.0);
+  while (true) {
+    if (received_) {
+      // The stats of the same solve usually follow at once; give them a moment for the report.
+      const ros::WallTime got = ros::WallTime::now();
+      while (!last_stats_ && ros::ok() && (ros::WallTime::now() - got).toSec() < 0.05)
+        ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.002));
+      return Outcome::kForces;
+    }
+    if (!solver_failure_.empty()) return Outcome::kSolverFailed;
+    if (!ros::ok()) return Outcome::kShutdown;
+    const ros::WallTime now = ros::WallTime::now();
+    double slice = kSpinSlice;
+    if (!forever) {
+      const double remaining = settings_.force_timeout - (now - start).toSec();
+      if (remaining <= 0.0) return Outcome::kTimeout;
+      slice = std::min(slice, remaining);
+    } else if (now >= next_note) {
+      ROS_WARN_STREAM("Still waiting for the forces of the step at " << stampText(stamp));
+      next_note = now + ros::WallDuration(5.0);
+    }
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(slice));
+  }
+}
+
+void MujocoBridgeNode::publishClock(const ros::Time& stamp) {
+  if (!settings_.publish_clock) return;
+  rosgraph_msgs::Clock clock;
+  clock.clock = stamp;
+  clock_pub_.publish(clock);
+}
+
+void MujocoBridgeNode::pace() {
+  if (settings_.rate_factor <= 0.0) {
+    ros::getGlobalCallbackQueue()->callAvailable();
+    return;
+  }
+  const ros::WallTime target = run_start_ + ros::WallDuration(world_->data()->time / settings_.rate_factor);
+  while (ros::ok()) {
+    const double remaining = (target - ros::WallTime::now()).toSec();
+    if (remaining <= 0.0) break;
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(std::min(remaining, kSpinSlice)));
+  }
+}
+
+void MujocoBridgeNode::statusLine(int contacts, int rows) {
+  const double t = world_->data()->time;
+  if (t + 1e-9 * dt_ < next_status_time_) return;
+  while (next_status_time_ <= t + 1e-9 * dt_) next_status_time_ += settings_.status_period;
+  if (settings_.print_summary) {
+    std::ostringstream line;
+    if (!header_printed_) {
+      line << "  sim time  contacts  rows  max residual  max rel diff  penetration [m]  energy [J]  missed\n";
+      header_printed_ = true;
+    }
+    const bool compares = !drive_ || settings_.compare;
+    line << std::fixed << std::setprecision(2) << std::setw(8) << t << " s" << std::setw(10) << contacts
+         << std::setw(6) << rows << std::scientific << std::setprecision(2) << std::setw(14) << period_max_residual_;
+    if (compares) line << std::setw(14) << period_max_rel_; else line << std::setw(14) << "-";
+    line << std::setw(17) << totals_.last_penetration << std::fixed << std::setprecision(3) << std::setw(12)
+         << totals_.last_energy << std::setw(8) << counters_.misses() << '\n';
+    std::cout << line.str() << std::flush;
+  }
+  period_max_rel_ = 0.0;
+  period_max_residual_ = 0.0;
+}
+
+void MujocoBridgeNode::writeSummary(std::ostream& out) const {
+  const mjModel* m = world_->model();
+  const mjData* d = world_->data();
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(2);
+  text << "mujoco " << settings_.model << " (cone " << scene::mujocoConeName(m->opt.cone) << ", mode "
+       << settings_.mode << "): " << counters_.steps << " steps, " << d->time << " s simulated";
+  if (run_wall_time_ > 0.0) text << " in " << run_wall_time_ << " s wall";
+  text << "\nforces: " << counters_.forces_applied << " of " << counters_.steps_with_rows
+       << " steps with contacts from the solver; " << counters_.force_timeouts << " timeouts, "
+       << counters_.solver_failures << " solver failures, " << counters_.bad_forces << " mismatched";
+  if (drive_) text << "; " << counters_.fallbacks << " steps by MuJoCo's own solver";
+  if (counters_.extract_errors > 0) text << "; " << counters_.extract_errors << " steps not convertible";
+  text << "\ncontacts: " << totals_.last_contacts << " at the end, " << totals_.max_contacts << " at most ("
+       << totals_.max_rows << " rows at most)";
+  text << std::scientific << std::setprecision(2);
+  text << "\nour residual: " << totals_.last_residual << " at the end, " << totals_.max_residual << " at most";
+  if (counters_.compared > 0) {
+    text << "\nmax difference to MuJoCo's forces (" << scene::mujocoSolverName(m->opt.solver) << "): "
+         << totals_.max_rel_diff << " relative, " << totals_.max_abs_diff << " N absolute, over "
+         << counters_.compared << " steps";
+    if (m->opt.cone == mjCONE_ELLIPTIC) {
+      text << "\n  per state of our contacts (MuJoCo solves the convex relaxation, we solve Coulomb):";
+      for (int k = 0; k < 3; ++k)
+        text << ' ' << kStateNames[k] << ' ' << totals_.state_max_rel[k] << " (" << totals_.state_count[k] << ")";
+    }
+  }
+  if (totals_.our_solves > 0 && totals_.mujoco_solves > 0)
+    text << "\nsolve time per step: ours " << totals_.our_solve_time / totals_.our_solves * 1e3 << " ms, MuJoCo's "
+         << totals_.mujoco_solve_time / totals_.mujoco_solves * 1e3 << " ms (" << scene::mujocoSolverName(m->opt.solver)
+         << ", " << m->opt.iterations << " iterations, tolerance " << std::defaultfloat << m->opt.tolerance
+         << "; not matched in accuracy: see mujoco_bench)";
+  text << std::fixed << std::setprecision(4) << "\nstate: energy " << totals_.first_energy << " J -> "
+       << totals_.last_energy << " J, penetration " << totals_.last_penetration << " m at the end, "
+       << totals_.max_penetration << " m at most";
+  if (m->nq >= 3 && m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE) text << ", root height " << d->qpos[2] << " m";
+  text << '\n';
+  out << text.str();
+}
+
+}  // namespace lcp_contact_solver_ros

@@ -1,0 +1,79 @@
+// Runs beside mujoco_bridge and contact_solver_node (test/ros/mujoco_bridge.test): reads the
+// bridge's ~step_report of every step with contacts and checks
+//   - the forces of every step came from the solver (no timeout, failure or mismatch);
+//   - our residual is tight and, when ~max_rel_diff >= 0, every step's forces agree with
+//     MuJoCo's efc_force within it (the pyramidal cone: an LCP with a unique solution);
+//   - the humanoid stays on the floor (penetration below 2 cm: MuJoCo's soft contacts give
+//     ~1.2 cm on the landing).
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Report = std::map<std::string, std::string>;
+
+double number(const Report& r, const std::string& key) {
+  const auto it = r.find(key);
+  EXPECT_NE(it, r.end()) << "report without " << key;
+  return it == r.end() ? 0.0 : std::strtod(it->second.c_str(), nullptr);
+}
+
+TEST(MujocoBridge, EveryStepSolvedAndMatched) {
+  ros::NodeHandle nh, pnh("~");
+  int min_reports = 60;
+  double max_rel_diff = 1e-6;
+  pnh.getParam("min_reports", min_reports);
+  pnh.getParam("max_rel_diff", max_rel_diff);
+
+  std::vector<Report> reports;
+  ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticStatus>(
+      "/mujoco_bridge/step_report", 1000, [&reports](const diagnostic_msgs::DiagnosticStatus::ConstPtr& msg) {
+        Report r;
+        for (const auto& kv : msg->values) r[kv.key] = kv.value;
+        r["_message"] = msg->message;
+        reports.push_back(r);
+      });
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(100.0);
+  while (ros::ok() && ros::WallTime::now() < end && static_cast<int>(reports.size()) < min_reports) {
+    ros::spinOnce();
+    ros::WallDuration(0.005).sleep();
+  }
+  ASSERT_GE(static_cast<int>(reports.size()), min_reports) << "too few step reports from the bridge";
+
+  double worst_rel = 0.0, worst_residual = 0.0, deepest = 0.0;
+  int max_contacts = 0;
+  for (const Report& r : reports) {
+    ASSERT_EQ(r.count("forces"), 1u);
+    EXPECT_EQ(r.at("forces"), "received") << "step " << r.at("step") << ": " << r.at("_message");
+    if (r.at("forces") != "received") continue;
+    max_contacts = std::max(max_contacts, static_cast<int>(number(r, "contacts")));
+    worst_residual = std::max(worst_residual, number(r, "residual"));
+    deepest = std::max(deepest, number(r, "penetration"));
+    if (max_rel_diff >= 0.0) {
+      const double rel = number(r, "max_rel_diff");
+      EXPECT_LE(rel, max_rel_diff) << "step " << r.at("step");
+      worst_rel = std::max(worst_rel, rel);
+    }
+  }
+  std::printf("%zu step reports: up to %d contacts, max residual %.2e, max relative difference to MuJoCo %.2e, "
+              "max penetration %.4f m\n",
+              reports.size(), max_contacts, worst_residual, worst_rel, deepest);
+  EXPECT_GT(max_contacts, 0);
+  EXPECT_LT(worst_residual, 1e-9);
+  EXPECT_LT(deepest, 0.02);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_mujoco_bridge");
+  return RUN_ALL_TESTS();
+}
