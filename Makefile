@@ -26,8 +26,7 @@ build: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target tests
 
 # Builds everything including tests, runs them all with ctest (catkin's `run_tests`
-# exits 0 on failure, so it is not used), and fails on any failure. Then the sanitizer
-# pass (test-asan).
+# exits 0 on failure, so it is not used), and fails on any failure.
 # SANITIZE=1 adds the AddressSanitizer/UBSan pass (test-asan) after ctest. It is off by
 # default until that pass has been verified on a clean clone within CI's time limit.
 SANITIZE ?= 0
