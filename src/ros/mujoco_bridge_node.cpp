@@ -49,6 +49,7 @@ std::string validate(const MujocoBridgeSettings& s) {
   if (!finite(s.force_timeout)) return "parameter force_timeout must be finite (<= 0 waits for ever)";
   if (!finite(s.wait_for_solver)) return "parameter wait_for_solver must be finite (<= 0 waits for ever)";
   if (s.min_report_subscribers < 0) return "parameter min_report_subscribers must be >= 0";
+  if (!finite(s.linger) || s.linger < 0.0) return "parameter linger must be >= 0";
   if (s.frame_id.empty()) return "parameter frame_id must not be empty";
   if (s.storage != "auto" && s.storage != "dense" && s.storage != "block_sparse")
     return "parameter storage must be auto, dense or block_sparse";
@@ -134,6 +135,7 @@ std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSet
            readParam(pnh, "force_timeout", &s->force_timeout, "a number"),
            readParam(pnh, "wait_for_solver", &s->wait_for_solver, "a number"),
            readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
+           readParam(pnh, "linger", &s->linger, "a number"),
            readParam(pnh, "frame_id", &s->frame_id, "a string"),
            readParam(pnh, "publish_clock", &s->publish_clock, "true or false"),
            readParam(pnh, "include_limits", &s->include_limits, "true or false"),
@@ -317,7 +319,16 @@ bool MujocoBridgeNode::run() {
   } else {
     ROS_INFO_STREAM("MuJoCo bridge " << (ros::ok() ? "finished" : "interrupted") << "\n" << summary.str());
   }
+  linger();
   return ros::ok();
+}
+
+// roscpp writes published messages from its own thread: a node that exits right after its
+// last publish can close the connections before a busy subscriber has read them.
+void MujocoBridgeNode::linger() {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(settings_.linger);
+  while (ros::ok() && ros::WallTime::now() < end)
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(kSpinSlice));
 }
 
 void MujocoBridgeNode::step() {

@@ -54,6 +54,7 @@ std::string validate(const SimulatorSettings& s) {
     return "parameter rest_linear_velocity must be > 0";
   if (!finite(s.rest_angular_velocity) || s.rest_angular_velocity <= 0.0)
     return "parameter rest_angular_velocity must be > 0";
+  if (!finite(s.linger) || s.linger < 0.0) return "parameter linger must be >= 0";
   return "";
 }
 
@@ -100,7 +101,8 @@ std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings*
            readParam(pnh, "print_status", &s->print_status, "true or false"),
            readParam(pnh, "status_period", &s->status_period, "a number"),
            readParam(pnh, "rest_linear_velocity", &s->rest_linear_velocity, "a number"),
-           readParam(pnh, "rest_angular_velocity", &s->rest_angular_velocity, "a number")}) {
+           readParam(pnh, "rest_angular_velocity", &s->rest_angular_velocity, "a number"),
+           readParam(pnh, "linger", &s->linger, "a number")}) {
     if (!error.empty()) return error;
   }
   return validate(*s);
@@ -225,7 +227,16 @@ bool SceneSimulatorNode::run() {
     ROS_INFO_STREAM("Simulation " << (ros::ok() ? "finished" : "interrupted") << "\n" << summary.str());
   }
   updater_.force_update();
+  linger();
   return true;
+}
+
+// roscpp writes published messages from its own thread: a node that exits right after its
+// last publish can close the connections before a busy subscriber has read them.
+void SceneSimulatorNode::linger() {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(settings_.linger);
+  while (ros::ok() && ros::WallTime::now() < end)
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(kSpinSlice));
 }
 
 scene::StepStats SceneSimulatorNode::step() {

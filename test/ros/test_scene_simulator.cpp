@@ -155,7 +155,9 @@ long long SceneSimulatorTest::steps_ = 0;
 TEST_F(SceneSimulatorTest, RunCompletes) {
   ASSERT_TRUE(connected_) << "the simulator's tf or the solver's forces never connected";
   ASSERT_GT(steps_, 0);
-  ASSERT_TRUE(finished_) << "no tf for the last step (" << steps_ << ") arrived";
+  ASSERT_TRUE(finished_) << "no tf for the last step (" << steps_ << ") arrived; the last seen: "
+                         << (recording_->poses.empty() ? std::string("none")
+                                                       : std::to_string(recording_->poses.rbegin()->first.toSec()) + " s");
   EXPECT_EQ(static_cast<long long>(recording_->poses.size()), steps_ + 1) << "tf stamps (initial pose + one per step)";
 }
 

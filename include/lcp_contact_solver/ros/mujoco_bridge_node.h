@@ -56,6 +56,7 @@ struct MujocoBridgeSettings {
   double force_timeout = 1.0;         // wall s to wait for the forces of a step; <= 0: for ever
   double wait_for_solver = 30.0;      // wall s to wait for the solver's connections; <= 0: for ever
   int min_report_subscribers = 0;     // also wait for this many ~step_report subscribers (tests)
+  double linger = 1.0;                // wall s to keep serving after the run (last messages flush)
   std::string frame_id = "world";     // frame of the contacts (MuJoCo's world frame)
   bool publish_clock = true;          // publish /clock with the simulated time
   bool include_limits = true;         // joint/tendon limits as unilateral rows
@@ -136,6 +137,7 @@ class MujocoBridgeNode {
   Outcome waitForForces(const ros::Time& stamp);
   void publishClock(const ros::Time& stamp);
   void pace();
+  void linger();
   void statusLine(int contacts, int rows);
   ros::Time stampOf(std::int64_t step) const;
 

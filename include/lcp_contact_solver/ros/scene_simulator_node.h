@@ -54,6 +54,8 @@ struct SimulatorSettings {
   double status_period = 1.0;       // simulated s between status lines / diagnostics
   double rest_linear_velocity = 1e-3;   // m/s: slower bodies (and ...)
   double rest_angular_velocity = 1e-2;  // rad/s: ... slower spin) are "at rest" in the summary
+  double linger = 1.0;              // wall s to keep serving after the run, so the last
+                                    // messages reach slow subscribers before the node exits
 };
 
 // Reads every private parameter present over the defaults in `settings`. Empty string, or a
@@ -112,6 +114,7 @@ class SceneSimulatorNode {
   void publishStaticTransforms();
   void publishState(const ros::Time& stamp);
   void pace(const ros::WallTime& start);
+  void linger();
   void reportPeriod(const lcs::scene::StepStats& stats);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
