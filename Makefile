@@ -11,7 +11,7 @@ PROBLEMS_DIR ?= $(abspath ../shared/problems)
 export ROS_HOME := $(abspath $(BUILD_DIR))/ros_home
 export ROS_LOG_DIR := $(ROS_HOME)/log
 
-.PHONY: all deps configure build test test-asan fuzz demo bench clean
+.PHONY: all deps configure build test test-asan fuzz demo bench stabilization clean
 
 all: build
 
@@ -104,6 +104,13 @@ bench:
 	@mkdir -p $(dir $(BENCH_CSV))
 	$(BENCH_BUILD_DIR)/devel/lib/lcp_contact_solver/work_precision --out $(BENCH_CSV) $(BENCH_ARGS)
 	/usr/bin/python3 bench/plot_work_precision.py $(BENCH_CSV)
+
+# What erp and softness cost in iterations and buy in depth (README "Penetration correction
+# and softness"): in-process, no ROS graph.
+stabilization: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target stabilization_tradeoff
+	@mkdir -p bench/results
+	$(BUILD_DIR)/devel/lib/lcp_contact_solver/stabilization_tradeoff --out bench/results/stabilization.csv
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_BUILD_DIR) $(FUZZ_BUILD_DIR)

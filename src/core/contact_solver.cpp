@@ -2,6 +2,7 @@
 
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/core/stabilization.h"
 
 #include <algorithm>
 #include <chrono>
@@ -169,17 +170,25 @@ void ContactSolver::rememberForces(const Problem& problem, const std::vector<int
   }
 }
 
-SolveResult ContactSolver::solve(const Problem& problem) {
+SolveResult ContactSolver::solve(const Problem& input) {
   const Clock::time_point start = Clock::now();
   SolveResult result;
   result.solver = solverName(params_.solver);
   std::string err = validateParams(params_);
-  if (err.empty()) err = validateProblem(problem, params_.max_rows);
+  if (err.empty()) err = validateProblem(input, params_.max_rows);
+  // Baumgarte and softness change d_free and W: solve a copy, only when they are used.
+  Problem stabilized;
+  const bool stabilize = err.empty() && needsStabilization(input, params_);
+  if (stabilize) {
+    stabilized = input;
+    err = applyStabilization(params_, &stabilized);
+  }
   if (!err.empty()) {
     result.status = SolveStatus::kInvalidInput;
     result.message = err;
     return result;
   }
+  const Problem& problem = stabilize ? stabilized : input;
 
   SolveContext ctx;
   ctx.problem = &problem;

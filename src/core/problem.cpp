@@ -225,6 +225,11 @@ std::string validateContacts(const Problem& problem) {
     // Negative means "use the default": only exactly the sentinel range is allowed, so a
     // typo like -0.3 is not silently replaced by the default.
     if (c.mu < 0.0 && c.mu != -1.0) return name + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
+    if (!std::isfinite(c.gap)) return name + " has a non-finite gap";
+    if (!std::isfinite(c.erp) || (c.erp != Contact::kUseDefault && (c.erp < 0.0 || c.erp > 1.0)))
+      return name + " has erp " + std::to_string(c.erp) + " outside [0, 1] (use -1 for the default)";
+    if (!std::isfinite(c.softness) || (c.softness != Contact::kUseDefault && c.softness < 0.0))
+      return name + " has a negative softness " + std::to_string(c.softness) + " (use -1 for the default)";
   }
   return "";
 }

@@ -92,6 +92,25 @@ std::vector<std::string> frictionModelNames() {
   return names;
 }
 
+const char* constraintLevelName(ConstraintLevel level) {
+  switch (level) {
+    case ConstraintLevel::kPosition: return "position";
+    case ConstraintLevel::kVelocity: return "velocity";
+  }
+  return "unknown";
+}
+
+bool parseConstraintLevel(const std::string& name, ConstraintLevel* level) {
+  if (name == "position") {
+    *level = ConstraintLevel::kPosition;
+  } else if (name == "velocity") {
+    *level = ConstraintLevel::kVelocity;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 std::string validateParams(const SolverParams& p) {
   auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   if (!std::isfinite(p.tolerance) || p.tolerance <= 0.0) return "tolerance must be a finite number > 0";
@@ -105,6 +124,10 @@ std::string validateParams(const SolverParams& p) {
   if (!nonNegative(p.time_budget)) return "time_budget must be a finite number >= 0 (0 disables it)";
   if (std::string(frictionModelName(p.friction_model)) == "unknown") return "friction_model is not a known model";
   if (std::string(solverName(p.solver)) == "unknown") return "solver is not a known solver";
+  if (!std::isfinite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be a number in [0, 1]";
+  if (!nonNegative(p.softness)) return "softness must be a finite number >= 0";
+  if (!nonNegative(p.time_step)) return "time_step must be a finite number >= 0";
+  if (std::string(constraintLevelName(p.constraint_level)) == "unknown") return "constraint_level is not a known level";
   return "";
 }
 

@@ -79,6 +79,16 @@ std::string checkMu(double mu) {
   return "";
 }
 
+std::string checkStabilization(const lcs::ContactPoint& msg) {
+  if (!std::isfinite(msg.gap)) return "has a non-finite gap";
+  if (!std::isfinite(msg.erp) || (msg.erp != lcs::ContactPoint::USE_DEFAULT && (msg.erp < 0.0 || msg.erp > 1.0)))
+    return "has erp " + std::to_string(msg.erp) + " outside [0, 1] (use USE_DEFAULT=-1 for the node's erp)";
+  if (!std::isfinite(msg.softness) || (msg.softness != lcs::ContactPoint::USE_DEFAULT && msg.softness < 0.0))
+    return "has a negative or non-finite softness " + std::to_string(msg.softness) +
+           " (use USE_DEFAULT=-1 for the node's softness)";
+  return "";
+}
+
 std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
   std::string error;
   const int rows = contactRows(msg, &error);
@@ -86,11 +96,15 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
   if (static_cast<int>(msg.d_free.size()) != rows)
     return "has " + std::to_string(msg.d_free.size()) + " d_free values for " + std::to_string(rows) + " rows";
   error = checkMu(msg.mu);
+  if (error.empty()) error = checkStabilization(msg);
   if (!error.empty()) return error;
   contact->id = msg.id;
   contact->type = static_cast<lcs::ContactType>(msg.type);
   contact->rows = rows;
   contact->mu = msg.mu;
+  contact->gap = msg.gap;
+  contact->erp = msg.erp;
+  contact->softness = msg.softness;
   return "";
 }
 

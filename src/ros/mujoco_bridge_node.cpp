@@ -187,6 +187,7 @@ lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& p
         break;
     }
     p.rows = static_cast<std::uint32_t>(c.rows);
+    // gap, erp, softness stay 0: MuJoCo's reference acceleration (solref) is already in d_free.
   }
   return msg;
 }

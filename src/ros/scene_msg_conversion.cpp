@@ -88,6 +88,9 @@ lcs::ContactArray toContactArrayMsg(const scene::StepProblem& step, const std_ms
     out.tangent2 = toVector3(f.t2);
     out.d_free.assign(problem.d_free.data() + offsets[i], problem.d_free.data() + offsets[i + 1]);
     out.mu = c.mu;
+    out.gap = c.gap;
+    out.erp = c.erp;
+    out.softness = c.softness;
     out.type = toMsgType(c.type);
     out.rows = static_cast<std::uint32_t>(c.rows);
   }

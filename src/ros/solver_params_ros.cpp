@@ -49,6 +49,15 @@ const std::string& frictionModelChoices() {
 }
 
 const char* kStoppingRuleChoices = "residual, sofa";
+const char* kConstraintLevelChoices = "position, velocity";
+
+std::string readConstraintLevel(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
+  std::string name = lcs::constraintLevelName(params->constraint_level);
+  std::string error = readParam(pnh, "constraint_level", &name);
+  if (error.empty() && !lcs::parseConstraintLevel(name, &params->constraint_level))
+    error = "parameter constraint_level: unknown level '" + name + "' (one of " + kConstraintLevelChoices + ")";
+  return error;
+}
 
 std::string readSolverKind(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
   std::string name = lcs::solverName(params->solver);
@@ -92,6 +101,8 @@ std::string readSolverParams(const ros::NodeHandle& pnh, lcs::SolverParams* p) {
            readParam(pnh, "computeConstraintForces", &p->computeConstraintForces),
            readParam(pnh, "displayDebug", &p->displayDebug), readParam(pnh, "max_rows", &p->max_rows),
            readParam(pnh, "sor", &p->sor), readParam(pnh, "time_budget", &p->time_budget),
+           readParam(pnh, "erp", &p->erp), readParam(pnh, "softness", &p->softness),
+           readParam(pnh, "time_step", &p->time_step), readConstraintLevel(pnh, p),
            readSolverKind(pnh, p), readStoppingRule(pnh, p), readFrictionModel(pnh, p)}) {
     if (!error.empty()) return error;
   }
@@ -181,6 +192,11 @@ const std::vector<OverrideField>& overrideFields() {
        [](const std::string& v, lcs::SolverParams* p) { return lcs::parseStoppingRule(v, &p->stopping_rule); }},
       {"friction_model", "one of " + frictionModelChoices(),
        [](const std::string& v, lcs::SolverParams* p) { return lcs::parseFrictionModel(v, &p->friction_model); }},
+      {"erp", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->erp); }},
+      {"softness", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->softness); }},
+      {"time_step", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->time_step); }},
+      {"constraint_level", std::string("one of ") + kConstraintLevelChoices,
+       [](const std::string& v, lcs::SolverParams* p) { return lcs::parseConstraintLevel(v, &p->constraint_level); }},
   };
   return fields;
 }
@@ -257,6 +273,10 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
   c.sor = s.solver.sor;
   c.time_budget = s.solver.time_budget;
   c.max_rows = s.solver.max_rows;
+  c.erp = s.solver.erp;
+  c.softness = s.solver.softness;
+  c.time_step = s.solver.time_step;
+  c.constraint_level = lcs::constraintLevelName(s.solver.constraint_level);
   c.force_arrow_scale = s.display.force_arrow_scale;
   c.show_w_heatmap = s.display.show_w_heatmap;
   return c;
@@ -270,6 +290,11 @@ std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSet
     return "stopping_rule: unknown rule '" + c.stopping_rule + "' (one of " + kStoppingRuleChoices + ")";
   if (!lcs::parseFrictionModel(c.friction_model, &next.solver.friction_model))
     return "friction_model: unknown model '" + c.friction_model + "' (one of " + frictionModelChoices() + ")";
+  if (!lcs::parseConstraintLevel(c.constraint_level, &next.solver.constraint_level))
+    return "constraint_level: unknown level '" + c.constraint_level + "' (one of " + kConstraintLevelChoices + ")";
+  next.solver.erp = c.erp;
+  next.solver.softness = c.softness;
+  next.solver.time_step = c.time_step;
   next.solver.sor = c.sor;
   next.solver.time_budget = c.time_budget;
   next.solver.tolerance = c.tolerance;

@@ -6,12 +6,7 @@
 namespace lcp_contact_solver {
 namespace scene {
 
-double gapTerm(double gap, double erp) {
-  // Speculative contact (gap > 0): the whole gap may close within the step, no more.
-  // Penetration (gap < 0): push out a fraction erp of it per step.
-  // Later β/softness per contact goes here, and only here.
-  return gap > 0.0 ? gap : erp * gap;
-}
+double gapTerm(double gap) { return gap > 0.0 ? gap : 0.0; }
 
 std::vector<Vector6d> freeVelocities(const Scene& scene, double dt) {
   std::vector<Vector6d> v(scene.bodies.size(), Vector6d::Zero());
@@ -115,8 +110,7 @@ std::vector<int> RigidContactModel::neighbours(int i) const {
   return out;
 }
 
-Eigen::VectorXd RigidContactModel::freeViolation(const std::vector<Vector6d>& v_free, double dt,
-                                                 double erp) const {
+Eigen::VectorXd RigidContactModel::freeViolation(const std::vector<Vector6d>& v_free, double dt) const {
   Eigen::VectorXd d = Eigen::VectorXd::Zero(rowCount());
   for (int c = 0; c < contactCount(); ++c) {
     const ContactData& cd = contacts_[c];
@@ -124,7 +118,7 @@ Eigen::VectorXd RigidContactModel::freeViolation(const std::vector<Vector6d>& v_
       if (s.body < 0) continue;
       d.segment(offsets_[c], cd.rows) += dt * (s.J.topRows(cd.rows) * v_free[s.body]);
     }
-    d[offsets_[c]] += gapTerm(cd.gap, erp);
+    d[offsets_[c]] += gapTerm(cd.gap);
   }
   return d;
 }
@@ -163,21 +157,28 @@ Eigen::MatrixXd RigidContactModel::denseInverseMass() const {
   return M;
 }
 
+std::vector<Contact> problemContacts(const Scene& scene, const std::vector<ContactFrame>& frames) {
+  std::vector<Contact> contacts(frames.size());
+  for (std::size_t c = 0; c < frames.size(); ++c) {
+    contacts[c].id = frames[c].id;
+    contacts[c].type = frames[c].type;
+    contacts[c].rows = frames[c].rows;
+    contacts[c].mu = frames[c].mu;
+    contacts[c].gap = frames[c].gap();
+    contacts[c].erp = scene.params.erp;
+    contacts[c].softness = scene.params.softness;
+  }
+  return contacts;
+}
+
 Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
-                     const std::vector<Vector6d>& v_free, double dt, double erp,
-                     ComplianceStorage storage) {
+                     const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage) {
   const RigidContactModel model(scene, frames);
   Problem p;
   p.name = scene.name;
-  p.contacts.resize(frames.size());
-  for (std::size_t c = 0; c < frames.size(); ++c) {
-    p.contacts[c].id = frames[c].id;
-    p.contacts[c].type = frames[c].type;
-    p.contacts[c].rows = frames[c].rows;
-    p.contacts[c].mu = frames[c].mu;
-  }
+  p.contacts = problemContacts(scene, frames);
   p.W = model.compliance(dt, storage);
-  p.d_free = model.freeViolation(v_free, dt, erp);
+  p.d_free = model.freeViolation(v_free, dt);
   return p;
 }
 

@@ -51,7 +51,8 @@ std::string validateSceneParams(const SceneParams& p) {
   auto finite = [](double v) { return std::isfinite(v); };
   if (!finite(p.dt) || p.dt <= 0.0) return "dt must be > 0 (s)";
   if (!p.gravity.allFinite()) return "gravity must be finite";
-  if (!finite(p.erp) || p.erp <= 0.0 || p.erp > 1.0) return "erp must be in (0, 1]";
+  if (!finite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be in [0, 1]";
+  if (!finite(p.softness) || p.softness < 0.0) return "softness must be >= 0 (m/N)";
   if (!finite(p.mu) || p.mu < 0.0) return "mu must be >= 0";
   for (const PairFriction& f : p.friction_pairs)
     if (!finite(f.mu) || f.mu < 0.0)
@@ -137,7 +138,7 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
   if (!root || root.IsNull()) return p;
   r.map(root, "");
   r.onlyKeys(root, "",
-             {"description", "dt", "gravity", "erp", "mu", "friction_pairs", "disable_collisions",
+             {"description", "dt", "gravity", "erp", "softness", "mu", "friction_pairs", "disable_collisions",
               "contact_margin", "id_match_tolerance", "compliance", "gyroscopic", "ground_plane",
               "joint_origins", "initial_velocities", "solver", "duration"});
   for (const auto& kv : root) {
@@ -151,6 +152,8 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       p.gravity = r.vec3(v, key);
     } else if (key == "erp") {
       p.erp = r.number(v, key);
+    } else if (key == "softness") {
+      p.softness = r.number(v, key);
     } else if (key == "mu") {
       p.mu = r.number(v, key);
     } else if (key == "contact_margin") {

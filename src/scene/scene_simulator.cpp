@@ -86,18 +86,13 @@ const StepProblem& SceneSimulator::buildStep(double dt) {
   model_ = std::make_unique<RigidContactModel>(scene_, problem_.frames);
   Problem& p = problem_.problem;
   p.name = scene_.name;
-  p.contacts.resize(problem_.frames.size());
-  for (std::size_t c = 0; c < problem_.frames.size(); ++c) {
-    const ContactFrame& f = problem_.frames[c];
-    p.contacts[c].id = f.id;
-    p.contacts[c].type = f.type;
-    p.contacts[c].rows = f.rows;
-    p.contacts[c].mu = f.mu;
+  p.contacts = problemContacts(scene_, problem_.frames);
+  for (const ContactFrame& f : problem_.frames) {
     building_.max_penetration = std::max(building_.max_penetration, f.depth);
     if (f.type == ContactType::kFrictionless) ++building_.frictionless_contacts;
   }
   p.W = model_->compliance(dt, scene_.params.compliance);
-  p.d_free = model_->freeViolation(v_free_, dt, scene_.params.erp);
+  p.d_free = model_->freeViolation(v_free_, dt);
   building_.contacts = static_cast<int>(p.contacts.size());
   building_.rows = p.rowCount();
   building_.time_contacts = seconds(t0, t1);

@@ -241,6 +241,51 @@ TEST_F(ContactSolverNodeTest, ServiceReturnsTheSameForces) {
   EXPECT_TRUE(srv.response.forces.forces.empty());
 }
 
+// Baumgarte β and softness: per solve as overrides (the node's ~erp/~softness for contacts
+// with USE_DEFAULT), per contact in the message; the same forces as the core with those.
+TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact) {
+  Scene scene = makeScene(freshIds(), freshStamp(), true);
+  for (lcs::ContactPoint& c : scene.contacts.contacts) {
+    c.gap = -0.02;
+    c.erp = lcs::ContactPoint::USE_DEFAULT;
+    c.softness = lcs::ContactPoint::USE_DEFAULT;
+  }
+  scene.contacts.contacts[1].erp = 0.5;  // its own β
+  scene.contacts.contacts[2].softness = 0.3;  // its own softness
+  lcs::SolveContacts srv;
+  srv.request.contacts = scene.contacts;
+  srv.request.compliance = scene.compliance;
+  srv.request.param_overrides = {"erp=0.2", "softness=0.05", "tolerance=1e-10"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  lcs::Problem problem;
+  std::vector<lcp_contact_solver_ros::ContactFrame> frames;
+  ASSERT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &problem, &frames), "");
+  EXPECT_EQ(problem.contacts[1].erp, 0.5);
+  EXPECT_EQ(problem.contacts[0].gap, -0.02);
+  lcs::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
+  params.erp = 0.2;
+  params.softness = 0.05;
+  params.tolerance = 1e-10;
+  const lcs::SolveResult expected = lcs::solveProblem(problem, params);
+  ASSERT_TRUE(expected.converged) << expected.message;
+  expectForcesEqual(srv.response.forces, problem, expected);
+  // The node's defaults (erp 0, softness 0) give the uncorrected forces: different ones.
+  srv.request.param_overrides = {"tolerance=1e-10"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  params.erp = 0.0;
+  params.softness = 0.0;
+  const lcs::SolveResult plain = lcs::solveProblem(problem, params);
+  expectForcesEqual(srv.response.forces, problem, plain);
+  EXPECT_GT((plain.forces - expected.forces).norm(), 1e-3);
+  // Velocity level without a step: refused, naming the parameter.
+  srv.request.param_overrides = {"erp=0.2", "constraint_level=velocity"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("time_step"), std::string::npos) << srv.response.message;
+}
+
 TEST_F(ContactSolverNodeTest, WarmStartLowersIterations) {
   const std::int64_t ids = freshIds();
   const lcs::SolverStats* cold = solve(makeScene(ids, freshStamp()));

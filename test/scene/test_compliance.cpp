@@ -1,4 +1,5 @@
 // Compliance W = dt² J M⁻¹ Jᵀ (dense and block-sparse) and d_free.
+#include "lcp_contact_solver/core/stabilization.h"
 #include "lcp_contact_solver/scene/compliance.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
@@ -53,10 +54,10 @@ void checkCompliance(const Scene& scene, const std::vector<ContactFrame>& frames
 }
 }  // namespace
 
-TEST(Compliance, GapTermIsTheOnlyPlaceGapEnters) {
-  EXPECT_DOUBLE_EQ(gapTerm(0.004, 0.2), 0.004);
-  EXPECT_DOUBLE_EQ(gapTerm(-0.004, 0.2), -0.0008);
-  EXPECT_DOUBLE_EQ(gapTerm(0.0, 0.2), 0.0);
+TEST(Compliance, GapTermKeepsOnlySpeculativeGaps) {
+  EXPECT_DOUBLE_EQ(gapTerm(0.004), 0.004);
+  EXPECT_DOUBLE_EQ(gapTerm(-0.004), 0.0);  // penetration: the solver's erp term
+  EXPECT_DOUBLE_EQ(gapTerm(0.0), 0.0);
 }
 
 TEST(Compliance, SingleSphereOnGroundAnalytic) {
@@ -69,7 +70,7 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
   const auto frames = gen.generate();
   ASSERT_EQ(frames.size(), 1u);
   for (ComplianceStorage storage : {ComplianceStorage::kDense, ComplianceStorage::kBlockSparse}) {
-    const Problem p = buildProblem(s, frames, freeVelocities(s, dt), dt, s.params.erp, storage);
+    const Problem p = buildProblem(s, frames, freeVelocities(s, dt), dt, storage);
     const Eigen::MatrixXd W = toDense(p.W);
     ASSERT_EQ(W.rows(), 3);
     // At the bottom point r ∥ n: the normal row sees only the mass.
@@ -94,17 +95,23 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
     ContactGenerator g(t);
     const auto f = g.generate();
     ASSERT_EQ(f.size(), 1u);
-    const Eigen::MatrixXd W = toDense(buildProblem(t, f, freeVelocities(t, dt), dt, 0.2, ComplianceStorage::kBlockSparse).W);
+    const Eigen::MatrixXd W = toDense(buildProblem(t, f, freeVelocities(t, dt), dt, ComplianceStorage::kBlockSparse).W);
     EXPECT_NEAR(W(0, 0), dt * dt / m, 1e-15);
     EXPECT_NEAR(W(1, 1), 3.5 * dt * dt / m, 1e-15);
     EXPECT_NEAR(W(2, 2), 3.5 * dt * dt / m, 1e-15);
   }
-  // Penetration enters through erp.
+  // Penetration: d_free holds the motion only; the contact carries the gap and the scene's
+  // erp, and the solver adds erp·gap (the solved problem's d_free).
   s.bodies[1].position.z() = r - gap;
+  s.params.erp = 0.2;
   ContactGenerator gen2(s);
   const auto pen = gen2.generate();
   ASSERT_EQ(pen.size(), 1u);
-  const Problem p = buildProblem(s, pen, freeVelocities(s, dt), dt, 0.2, ComplianceStorage::kDense);
+  Problem p = buildProblem(s, pen, freeVelocities(s, dt), dt, ComplianceStorage::kDense);
+  EXPECT_NEAR(p.d_free[0], dt * (-0.2 - 9.81 * dt), 1e-15);
+  EXPECT_NEAR(p.contacts[0].gap, -gap, 1e-12);
+  EXPECT_EQ(p.contacts[0].erp, 0.2);
+  ASSERT_EQ(applyStabilization(SolverParams(), &p), "");
   EXPECT_NEAR(p.d_free[0], -0.2 * gap + dt * (-0.2 - 9.81 * dt), 1e-15);
 }
 

@@ -24,6 +24,8 @@ class ContactSolver {
   std::string setParams(const SolverParams& params);
   const SolverParams& params() const { return params_; }
 
+  // Solves `problem` with its erp/softness applied (stabilization.h); the result's d and
+  // residual are those of the problem as solved.
   SolveResult solve(const Problem& problem);
 
   // Forgets the forces remembered for warm starting.

@@ -37,8 +37,16 @@ struct Contact {
   // `mu` parameter is used; any other negative value is invalid input. Only meaningful for frictional contacts; μ = 0 makes a frictional
   // contact cost one row.
   double mu = -1.0;
+  // Position-error correction and softness of the normal row (stabilization.h); unused by
+  // bilateral contacts. gap: signed distance at the start of the step (m; < 0 penetration),
+  // 0 when unknown. erp: Baumgarte factor β in [0, 1]; softness: added to W_nn, >= 0 in the
+  // units of W. kUseDefault (-1) takes the solver's `erp` / `softness` parameter.
+  double gap = 0.0;
+  double erp = -1.0;
+  double softness = -1.0;
 
   static constexpr double kMuDefault = -1.0;
+  static constexpr double kUseDefault = -1.0;
 };
 
 // Block-sparse square matrix whose block rows/columns are the contacts. Block (i, j) is a

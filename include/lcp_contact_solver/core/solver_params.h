@@ -45,6 +45,12 @@ enum class StoppingRule {
   kSofa,
 };
 
+// What d measures, which decides how a gap enters it (stabilization.h).
+enum class ConstraintLevel {
+  kPosition,  // d is a displacement over the step (m), SOFA's d_free: β·gap is added
+  kVelocity,  // d is a velocity (m/s): β·gap/time_step is added (Baumgarte's form)
+};
+
 struct SolverParams {
   // [tolerance] Convergence threshold. With kResidual: the normalised natural-map
   // residual (dimensionless). With kSofa: the per-sweep summed displacement change, in
@@ -95,6 +101,15 @@ struct SolverParams {
   // Refuse problems with more rows than this (0 = no limit); protects against
   // allocation failures from hostile input.
   int max_rows = 0;
+  // Position-error correction (Baumgarte, ODE's ERP) for contacts that give none: the
+  // fraction β in [0, 1] of a penetration (Contact::gap < 0) removed per solve. 0 = none.
+  double erp = 0.0;
+  // Softness (ODE's CFM) for contacts that give none: added to the contact's W_nn, in the
+  // units of W. With erp it makes the contact a spring of stiffness β / softness.
+  double softness = 0.0;
+  ConstraintLevel constraint_level = ConstraintLevel::kPosition;
+  // The step h (s) dividing β·gap at velocity level; required (> 0) only there.
+  double time_step = 0.0;
 };
 
 const char* solverName(SolverKind kind);
@@ -107,6 +122,9 @@ bool parseStoppingRule(const std::string& name, StoppingRule* rule);
 const char* frictionModelName(FrictionModel model);
 bool parseFrictionModel(const std::string& name, FrictionModel* model);
 std::vector<std::string> frictionModelNames();
+// "position", "velocity".
+const char* constraintLevelName(ConstraintLevel level);
+bool parseConstraintLevel(const std::string& name, ConstraintLevel* level);
 
 // Empty string if the parameters are valid, otherwise a sentence naming the bad field.
 std::string validateParams(const SolverParams& params);

@@ -4,11 +4,13 @@
 // Units and formulation (position level, SOFA's convention, λ in newtons). For a step dt:
 //   v_free = v + dt M⁻¹ f_ext                       (gravity, external wrenches)
 //   W      = dt² J M⁻¹ Jᵀ                            (m/N)
-//   d_free = gapTerm(gap) + dt (J v_free)  normal row (m)
+//   d_free = gapTerm(gap) + dt (J v_free)  normal row (m); the contact also carries gap,
+//            the scene's erp and softness, which the solver applies (core/stabilization.h)
 //            dt (J v_free)                  tangent rows (m)
 //   λ      = the contact forces over the step (N), from d = W λ + d_free, 0 ≤ λ_n ⟂ d_n ≥ 0
 //   v_new  = v_free + dt M⁻¹ Jᵀ λ,  then x_new from v_new (semi-implicit Euler).
-// so d_n = gapTerm(gap) + dt (J v_new): the gap left after the step.
+// so d_n = gapTerm(gap) + dt (J v_new): the gap left after the step (with a penetration the
+// solver adds erp·gap, so d_n ≥ 0 removes the fraction erp of it per step).
 //
 // J: one row per contact row (normal, t1, t2), two 6-dof blocks (body A, body B), each in
 // the body's [linear; angular] velocity coordinates (COM velocity, world angular velocity):
@@ -30,10 +32,10 @@ namespace scene {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-// The one place where the gap enters d_free: gap when gap > 0 (speculative contact: no
-// force unless the bodies would meet within the step), erp·gap when gap < 0 (penetration;
-// erp is the fraction removed per step).
-double gapTerm(double gap, double erp);
+// The gap in d_free: gap when gap > 0 (speculative contact: no force unless the bodies
+// would meet within the step), 0 when gap < 0: the penetration is corrected by the solver's
+// Baumgarte term from Contact::gap and Contact::erp, the same in-process and through the node.
+double gapTerm(double gap);
 
 // Free velocities [v; ω] of every body after dt under gravity and external wrenches
 // (zero for static bodies).
@@ -53,7 +55,7 @@ class RigidContactModel {
   // (both (i, j) and (j, i)), columns ascending.
   ComplianceMatrix compliance(double dt, ComplianceStorage storage) const;
   // gapTerm + dt J v_free.
-  Eigen::VectorXd freeViolation(const std::vector<Vector6d>& v_free, double dt, double erp) const;
+  Eigen::VectorXd freeViolation(const std::vector<Vector6d>& v_free, double dt) const;
   // v += dt M⁻¹ Jᵀ λ for every dynamic body (λ one entry per row).
   void applyForces(const Eigen::VectorXd& lambda, double dt, std::vector<Vector6d>* velocities) const;
   // Jᵀ λ per body: the contact wrench [force; torque about the COM] on each body (world).
@@ -85,10 +87,12 @@ class RigidContactModel {
   std::vector<Eigen::Matrix<double, 6, 6>> inverse_mass_;  // per body (zero for static)
 };
 
+// The core contacts of the frames: id, type, rows, μ, gap, and the scene's erp and softness.
+std::vector<Contact> problemContacts(const Scene& scene, const std::vector<ContactFrame>& frames);
+
 // Problem (contacts, W, d_free) of the given frames; frames.size() == contacts.
 Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
-                     const std::vector<Vector6d>& v_free, double dt, double erp,
-                     ComplianceStorage storage);
+                     const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
 
 }  // namespace scene
 }  // namespace lcp_contact_solver

@@ -72,9 +72,13 @@ struct SceneParams {
   // Fixed time step of the simulator (s). SceneSimulator::step() uses it.
   double dt = 0.01;
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  // m/s²
-  // Position-error reduction: the fraction of a penetration removed per step (0..1].
-  // See gapTerm() in compliance.h: the one place where the gap enters d_free.
+  // Position-error reduction β: the fraction of a penetration removed per step, [0, 1];
+  // 0 leaves penetrations as they are. Each contact carries it with its gap; the solver
+  // applies it (core/stabilization.h), in-process and through the node alike.
   double erp = 0.2;
+  // Contact softness (CFM) added to each contact's W_nn (m/N, since W = dt² J M⁻¹ Jᵀ):
+  // with erp a spring of stiffness erp / softness per contact. 0 = rigid.
+  double softness = 0.0;
   // Default friction coefficient of every body pair; `friction_pairs` overrides it.
   double mu = 0.5;
   std::vector<PairFriction> friction_pairs;

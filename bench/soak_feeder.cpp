@@ -1,0 +1,163 @@
+// Soak feeder (bench/soak.sh, docs/BENCHMARKS.md "Soak"; a benchmark, not a test).
+//
+// Replays the ContactArray/Compliance pairs of a recorded bag to a live contact_solver node
+// in a loop, at a fixed wall-clock rate, for a fixed time, and counts what comes back. Each
+// pair is sent with a fresh stamp, the same on both messages: the node pairs them by exact
+// stamp, so a repeated stamp would pair with the wrong partner. The contact ids are kept, so
+// the node warm-starts as it would in a running simulation.
+//
+//   soak_feeder BAG [--rate HZ] [--duration S] [--stats TOPIC]
+//
+// Defaults: 1000 Hz, 300 s, stats from contact_solver/stats. Topics are remappable. Prints a line per second (the soak script reads `forces N` from it) and a summary.
+#include <lcp_contact_solver/Compliance.h>
+#include <lcp_contact_solver/ConstraintForces.h>
+#include <lcp_contact_solver/ContactArray.h>
+#include <lcp_contact_solver/SolverStats.h>
+#include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using lcp_contact_solver::Compliance;
+using lcp_contact_solver::ConstraintForces;
+using lcp_contact_solver::ContactArray;
+using lcp_contact_solver::SolverStats;
+
+struct Pair {
+  ContactArray contacts;
+  Compliance compliance;
+};
+
+// Matched by stamp, whatever the topics were called when recorded; the other types in the
+// bag (the recorded forces and stats) are skipped. Sorted by stamp, i.e. in recording order.
+std::vector<Pair> readPairs(const std::string& path) {
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::map<ros::Time, ContactArray::ConstPtr> contacts;
+  std::map<ros::Time, Compliance::ConstPtr> compliance;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (auto c = m.instantiate<ContactArray>()) contacts[c->header.stamp] = c;
+    else if (auto w = m.instantiate<Compliance>()) compliance[w->header.stamp] = w;
+  }
+  std::vector<Pair> pairs;
+  for (const auto& [stamp, c] : contacts) {
+    auto w = compliance.find(stamp);
+    if (w != compliance.end()) pairs.push_back({*c, *w->second});
+  }
+  return pairs;
+}
+
+int usage() {
+  std::fprintf(stderr, "usage: soak_feeder BAG [--rate HZ] [--duration S] [--stats TOPIC]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "soak_feeder", ros::init_options::AnonymousName);
+  std::string bag, stats_topic = "contact_solver/stats";
+  double rate = 1000.0, duration = 300.0;
+  for (int i = 1; i < argc; ++i) {  // ros::init has removed the remappings
+    const std::string a = argv[i];
+    if (a == "--rate" && i + 1 < argc) rate = std::atof(argv[++i]);
+    else if (a == "--duration" && i + 1 < argc) duration = std::atof(argv[++i]);
+    else if (a == "--stats" && i + 1 < argc) stats_topic = argv[++i];
+    else if (!a.empty() && a[0] != '-') bag = a;
+    else return usage();
+  }
+  if (bag.empty() || !(rate > 0.0) || !(duration > 0.0)) return usage();
+
+  std::vector<Pair> pairs;
+  try {
+    pairs = readPairs(bag);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "soak_feeder: %s: %s\n", bag.c_str(), e.what());
+    return 2;
+  }
+  if (pairs.empty()) {
+    std::fprintf(stderr, "soak_feeder: %s holds no ContactArray/Compliance pair\n", bag.c_str());
+    return 2;
+  }
+
+  ros::NodeHandle nh;  // the first handle contacts the master: only once the input is good
+  // Subscribing to constraint_forces also makes the node publish them (it does so only
+  // with a subscriber unless computeConstraintForces is set), so the soak covers that path.
+  std::atomic<long> forces{0}, stats{0}, failures{0};
+  std::map<std::string, long> failed_by_status;  // written by the spinner thread only, read after it stops
+  ros::Subscriber forces_sub = nh.subscribe<ConstraintForces>(
+      "constraint_forces", 1000, [&](const ConstraintForces::ConstPtr&) { ++forces; });
+  ros::Subscriber stats_sub = nh.subscribe<SolverStats>(stats_topic, 1000, [&](const SolverStats::ConstPtr& s) {
+    ++stats;
+    if (!s->success) {
+      ++failures;
+      ++failed_by_status[s->status];
+    }
+  });
+  ros::Publisher contacts_pub = nh.advertise<ContactArray>("contacts", 100);
+  ros::Publisher compliance_pub = nh.advertise<Compliance>("compliance", 100);
+  // Callbacks in their own thread, so counting never delays the publishing loop.
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+
+  // Messages sent before the connections are up would be lost and counted as failures.
+  const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(30.0);
+  while (ros::ok() && (contacts_pub.getNumSubscribers() == 0 || compliance_pub.getNumSubscribers() == 0 ||
+                       forces_sub.getNumPublishers() == 0 || stats_sub.getNumPublishers() == 0)) {
+    if (ros::WallTime::now() > give_up) {
+      std::fprintf(stderr, "soak_feeder: no contact solver connected within 30 s\n");
+      return 1;
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  ros::WallDuration(0.5).sleep();  // connections are counted before the header exchange ends
+
+  std::printf("soak_feeder: %zu pairs from %s (%zu contacts in the first), %.0f Hz for %.0f s\n", pairs.size(),
+              bag.c_str(), pairs.front().contacts.contacts.size(), rate, duration);
+  std::fflush(stdout);
+
+  // Wall time throughout: the soak runs without /clock, and its rate is a real-time one.
+  const ros::WallTime start = ros::WallTime::now();
+  ros::WallRate loop(rate);  // a late cycle restarts the schedule instead of bursting to catch up
+  ros::Time last_stamp;
+  long sent = 0, sent_at_report = 0;
+  double last_report = 0.0, elapsed = 0.0;
+  while (ros::ok() && (elapsed = (ros::WallTime::now() - start).toSec()) < duration) {
+    Pair& p = pairs[sent % pairs.size()];
+    const ros::WallTime now = ros::WallTime::now();
+    ros::Time stamp(now.sec, now.nsec);
+    if (stamp <= last_stamp) stamp = last_stamp + ros::Duration(0, 1);  // strictly increasing
+    last_stamp = p.contacts.header.stamp = p.compliance.header.stamp = stamp;
+    // Compliance first: the node solves when the ContactArray's partner is there.
+    compliance_pub.publish(p.compliance);
+    contacts_pub.publish(p.contacts);
+    ++sent;
+    if (elapsed - last_report >= 1.0) {
+      std::printf("t %5.0f s  sent %9ld  rate %7.1f Hz  forces %9ld  stats %9ld  failures %6ld\n", elapsed, sent,
+                  (sent - sent_at_report) / (elapsed - last_report), forces.load(), stats.load(), failures.load());
+      std::fflush(stdout);
+      sent_at_report = sent;
+      last_report = elapsed;
+    }
+    loop.sleep();
+  }
+  const double total = (ros::WallTime::now() - start).toSec();
+
+  // The last answers are still on their way.
+  const ros::WallTime drain_end = ros::WallTime::now() + ros::WallDuration(2.0);
+  while (ros::ok() && ros::WallTime::now() < drain_end && stats.load() < sent) ros::WallDuration(0.01).sleep();
+  spinner.stop();
+
+  std::printf("summary: sent %ld pairs in %.1f s (%.1f Hz achieved, %.0f Hz asked); forces received %ld, "
+              "stats received %ld, failures %ld, unanswered %ld\n",
+              sent, total, sent / total, rate, forces.load(), stats.load(), failures.load(), sent - stats.load());
+  for (const auto& [status, n] : failed_by_status) std::printf("failures: %ld %s\n", n, status.c_str());
+  return stats.load() > 0 ? 0 : 1;
+}

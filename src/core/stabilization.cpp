@@ -1,0 +1,91 @@
+#include "lcp_contact_solver/core/stabilization.h"
+
+#include <variant>
+
+namespace lcp_contact_solver {
+
+namespace {
+
+bool hasNormalRow(const Contact& c) { return c.type != ContactType::kBilateral; }
+
+// W_rr += s for the given rows. A block-sparse W without a stored diagonal block gets one.
+void addToDiagonal(const std::vector<int>& offsets, const std::vector<double>& add, ComplianceMatrix* W) {
+  if (auto* dense = std::get_if<Eigen::MatrixXd>(W)) {
+    for (std::size_t i = 0; i < add.size(); ++i)
+      if (add[i] != 0.0) (*dense)(offsets[i], offsets[i]) += add[i];
+    return;
+  }
+  auto& sparse = std::get<BlockSparseMatrix>(*W);
+  bool missing = false;
+  for (int i = 0; i < sparse.blockCount(); ++i) {
+    if (add[i] == 0.0) continue;
+    bool found = false;
+    for (int b = sparse.row_start[i]; b < sparse.row_start[i + 1]; ++b) {
+      if (sparse.block_col[b] != i) continue;
+      sparse.values[sparse.value_start[b]] += add[i];  // (0, 0): the normal row, row-major
+      found = true;
+    }
+    missing = missing || !found;
+  }
+  if (!missing) return;
+  // Rare (a contact with no self-compliance stored): rebuild with the diagonal blocks added.
+  std::vector<int> sizes(sparse.blockCount());
+  for (int i = 0; i < sparse.blockCount(); ++i) sizes[i] = sparse.block_offset[i + 1] - sparse.block_offset[i];
+  BlockSparseMatrix out = BlockSparseMatrix::withBlockSizes(sizes);
+  for (int i = 0; i < sparse.blockCount(); ++i) {
+    out.beginRow();
+    bool found = false;
+    for (int b = sparse.row_start[i]; b < sparse.row_start[i + 1]; ++b) {
+      const int j = sparse.block_col[b];
+      found = found || j == i;
+      out.addBlock(j, Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                          sparse.values.data() + sparse.value_start[b], sizes[i], sizes[j]));
+    }
+    if (!found && add[i] != 0.0) {
+      Eigen::MatrixXd block = Eigen::MatrixXd::Zero(sizes[i], sizes[i]);
+      block(0, 0) = add[i];
+      out.addBlock(i, block);
+    }
+  }
+  *W = std::move(out);
+}
+
+}  // namespace
+
+double effectiveErp(const Contact& contact, const SolverParams& params) {
+  if (!hasNormalRow(contact)) return 0.0;
+  return contact.erp == Contact::kUseDefault ? params.erp : contact.erp;
+}
+
+double effectiveSoftness(const Contact& contact, const SolverParams& params) {
+  if (!hasNormalRow(contact)) return 0.0;
+  return contact.softness == Contact::kUseDefault ? params.softness : contact.softness;
+}
+
+bool needsStabilization(const Problem& problem, const SolverParams& params) {
+  for (const Contact& c : problem.contacts)
+    if ((c.gap < 0.0 && effectiveErp(c, params) > 0.0) || effectiveSoftness(c, params) > 0.0) return true;
+  return false;
+}
+
+std::string applyStabilization(const SolverParams& params, Problem* problem) {
+  const bool velocity = params.constraint_level == ConstraintLevel::kVelocity;
+  const std::vector<int> offsets = problem->rowOffsets();
+  std::vector<double> softness(problem->contacts.size(), 0.0);
+  bool soft = false;
+  for (std::size_t i = 0; i < problem->contacts.size(); ++i) {
+    const Contact& c = problem->contacts[i];
+    const double beta = effectiveErp(c, params);
+    if (c.gap < 0.0 && beta > 0.0) {
+      if (velocity && params.time_step <= 0.0)
+        return "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) + ")";
+      problem->d_free[offsets[i]] += velocity ? beta * c.gap / params.time_step : beta * c.gap;
+    }
+    softness[i] = effectiveSoftness(c, params);
+    soft = soft || softness[i] > 0.0;
+  }
+  if (soft) addToDiagonal(offsets, softness, &problem->W);
+  return "";
+}
+
+}  // namespace lcp_contact_solver
