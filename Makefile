@@ -11,7 +11,8 @@ PROBLEMS_DIR ?= $(abspath ../shared/problems)
 export ROS_HOME := $(abspath $(BUILD_DIR))/ros_home
 export ROS_LOG_DIR := $(ROS_HOME)/log
 
-.PHONY: all deps configure build test test-asan fuzz demo bench stabilization clean
+.PHONY: all deps configure build test test-asan fuzz demo bench soak stabilization clean \
+        bench8 bench8-configure effects-cost scaling latency
 
 all: build
 
@@ -105,12 +106,55 @@ bench:
 	$(BENCH_BUILD_DIR)/devel/lib/lcp_contact_solver/work_precision --out $(BENCH_CSV) $(BENCH_ARGS)
 	/usr/bin/python3 bench/plot_work_precision.py $(BENCH_CSV)
 
+# The soak benchmark (docs/BENCHMARKS.md "Soak", issue #7): contact_solver_node fed from
+# test/data/box_stack.bag at 1 kHz for 5 minutes by bench/soak_feeder.cpp, its RSS sampled
+# each second into bench/results/soak_rss_box_stack.csv (and .log), then a summary. Builds
+# only the two executables, in BUILD_DIR. Not part of `make test`. SOAK_ARGS passes options:
+#   make soak SOAK_ARGS="--bag test/data/mixed.bag --duration 60 --param queue_size=100"
+SOAK_ARGS ?=
+soak: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target contact_solver_node soak_feeder
+	bench/soak.sh --build $(BUILD_DIR) $(SOAK_ARGS)
+
 # What erp and softness cost in iterations and buy in depth (README "Penetration correction
 # and softness"): in-process, no ROS graph.
 stabilization: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target stabilization_tradeoff
 	@mkdir -p bench/results
 	$(BUILD_DIR)/devel/lib/lcp_contact_solver/stabilization_tradeoff --out bench/results/stabilization.csv
+
+# Issue #8 benchmarks (docs/BENCHMARKS.md "Paying only for what a scene uses", "Scaling",
+# "Latency and rate"): in-process effect costs and scaling, then the live node/nodelet round
+# trip (bench/latency.sh: private roscore, stops what it starts). Built in BENCH8_BUILD_DIR
+# (only these targets); CSVs in bench/results/. Not part of `make test`. Each can run alone:
+#   make effects-cost EFFECTS_ARGS="--bases 5 --balls 40"   make scaling SCALING_ARGS="--bases 2,5 --balls 4,40"
+#   make latency LATENCY_ARGS="--modes node --count 100"
+BENCH8_BUILD_DIR ?= build-bench8
+BENCH8_BIN = $(BENCH8_BUILD_DIR)/devel/lib/lcp_contact_solver
+EFFECTS_ARGS ?=
+SCALING_ARGS ?=
+LATENCY_ARGS ?=
+bench8: effects-cost scaling latency
+
+bench8-configure:
+	@scripts/install-deps
+	cmake -S . -B $(BENCH8_BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+
+effects-cost: bench8-configure
+	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target effects_cost
+	@mkdir -p bench/results
+	$(BENCH8_BIN)/effects_cost --out bench/results/effects_cost.csv $(EFFECTS_ARGS) >bench/results/effects_cost.log
+	@cat bench/results/effects_cost.log
+
+scaling: bench8-configure
+	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target scaling_bench
+	@mkdir -p bench/results
+	$(BENCH8_BIN)/scaling_bench --out bench/results/scaling.csv $(SCALING_ARGS) >bench/results/scaling.log
+	@cat bench/results/scaling.log
+
+latency: bench8-configure
+	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target latency_bench
+	bench/latency.sh --build $(BENCH8_BUILD_DIR) $(LATENCY_ARGS)
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_BUILD_DIR) $(FUZZ_BUILD_DIR)

@@ -5,6 +5,7 @@
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 namespace lcs_bench {
@@ -96,8 +97,13 @@ SceneProblem runAndTake(const std::string& name, const std::string& scene_name, 
   out.steps = steps;
   sc::SceneSimulator sim(std::move(scene));
   for (int i = 0; i < steps; ++i) sim.step();
-  out.problem = sim.buildStep().problem;
+  const sc::StepProblem& step = sim.buildStep();
+  out.problem = step.problem;
   out.problem.name = name;
+  out.body_form = out.problem;
+  out.body_form.W = Eigen::MatrixXd();
+  out.body_form.bodies = std::make_shared<const lcs::BodyCompliance>(
+      sc::RigidContactModel(sim.scene(), step.frames).bodyCompliance(step.dt));
   return out;
 }
 

@@ -28,6 +28,9 @@ struct SceneProblem {
   int bodies = 0;
   int steps = 0;      // simulated steps before the problem was taken
   lcp_contact_solver::Problem problem;
+  // The same step with the compliance in body form (Problem::bodies, no W; the unbuilt solve,
+  // bench/unbuilt_scaling.cpp).
+  lcp_contact_solver::Problem body_form;
 };
 
 // Box pyramids with the given base widths, then sphere piles with the given ball counts.

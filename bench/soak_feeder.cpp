@@ -8,7 +8,9 @@
 //
 //   soak_feeder BAG [--rate HZ] [--duration S] [--stats TOPIC]
 //
-// Defaults: 1000 Hz, 300 s, stats from contact_solver/stats. Topics are remappable. Prints a line per second (the soak script reads `forces N` from it) and a summary.
+// Defaults: 1000 Hz, 300 s, stats from contact_solver/stats; the topics are remappable.
+// Prints a line per second (bench/soak.sh reads `forces N` from it) and a summary; the
+// failures are stats with success false, by status.
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ConstraintForces.h>
 #include <lcp_contact_solver/ContactArray.h>
@@ -21,6 +23,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,6 +39,15 @@ struct Pair {
   Compliance compliance;
 };
 
+// A message recorded with an older definition of its type does not instantiate (its MD5
+// differs): say so, or an outdated bag would look empty.
+template <class M>
+void checkDefinition(const rosbag::MessageInstance& m) {
+  if (m.getDataType() == ros::message_traits::datatype<M>() && m.getMD5Sum() != ros::message_traits::md5sum<M>())
+    throw std::runtime_error(m.getDataType() + " was recorded with another definition of the message (MD5 " +
+                             m.getMD5Sum() + ", built " + ros::message_traits::md5sum<M>() + "): re-record the bag");
+}
+
 // Matched by stamp, whatever the topics were called when recorded; the other types in the
 // bag (the recorded forces and stats) are skipped. Sorted by stamp, i.e. in recording order.
 std::vector<Pair> readPairs(const std::string& path) {
@@ -43,6 +55,8 @@ std::vector<Pair> readPairs(const std::string& path) {
   std::map<ros::Time, ContactArray::ConstPtr> contacts;
   std::map<ros::Time, Compliance::ConstPtr> compliance;
   for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    checkDefinition<ContactArray>(m);
+    checkDefinition<Compliance>(m);
     if (auto c = m.instantiate<ContactArray>()) contacts[c->header.stamp] = c;
     else if (auto w = m.instantiate<Compliance>()) compliance[w->header.stamp] = w;
   }
@@ -90,17 +104,23 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh;  // the first handle contacts the master: only once the input is good
   // Subscribing to constraint_forces also makes the node publish them (it does so only
   // with a subscriber unless computeConstraintForces is set), so the soak covers that path.
+  // TCP_NODELAY: the answers arrive as sent, not batched by Nagle's algorithm, so the
+  // per-second counts are those of that second.
   std::atomic<long> forces{0}, stats{0}, failures{0};
   std::map<std::string, long> failed_by_status;  // written by the spinner thread only, read after it stops
+  const ros::TransportHints no_delay = ros::TransportHints().tcpNoDelay();
   ros::Subscriber forces_sub = nh.subscribe<ConstraintForces>(
-      "constraint_forces", 1000, [&](const ConstraintForces::ConstPtr&) { ++forces; });
-  ros::Subscriber stats_sub = nh.subscribe<SolverStats>(stats_topic, 1000, [&](const SolverStats::ConstPtr& s) {
-    ++stats;
-    if (!s->success) {
-      ++failures;
-      ++failed_by_status[s->status];
-    }
-  });
+      "constraint_forces", 1000, [&](const ConstraintForces::ConstPtr&) { ++forces; }, ros::VoidConstPtr(), no_delay);
+  ros::Subscriber stats_sub = nh.subscribe<SolverStats>(
+      stats_topic, 1000,
+      [&](const SolverStats::ConstPtr& s) {
+        ++stats;
+        if (!s->success) {
+          ++failures;
+          ++failed_by_status[s->status];
+        }
+      },
+      ros::VoidConstPtr(), no_delay);
   ros::Publisher contacts_pub = nh.advertise<ContactArray>("contacts", 100);
   ros::Publisher compliance_pub = nh.advertise<Compliance>("compliance", 100);
   // Callbacks in their own thread, so counting never delays the publishing loop.
@@ -135,7 +155,7 @@ int main(int argc, char** argv) {
     ros::Time stamp(now.sec, now.nsec);
     if (stamp <= last_stamp) stamp = last_stamp + ros::Duration(0, 1);  // strictly increasing
     last_stamp = p.contacts.header.stamp = p.compliance.header.stamp = stamp;
-    // Compliance first: the node solves when the ContactArray's partner is there.
+    // Compliance first, so the pair is complete when the ContactArray arrives.
     compliance_pub.publish(p.compliance);
     contacts_pub.publish(p.contacts);
     ++sent;

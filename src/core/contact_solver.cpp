@@ -1,5 +1,6 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/core/stabilization.h"
@@ -14,7 +15,7 @@ namespace lcp_contact_solver {
 // ---- SolveContext ---------------------------------------------------------------------------
 
 void SolveContext::computeD(const Eigen::VectorXd& lambda, Eigen::VectorXd& d) const {
-  multiply(problem->W, lambda, d);
+  multiplyCompliance(*problem, lambda, d);  // the body form (unbuilt solve) without forming W
   d += problem->d_free;
   if (regularization != 0.0) d += regularization * lambda;
 }
@@ -27,7 +28,7 @@ double SolveContext::residual(const Eigen::VectorXd& lambda) const {
 
 bool SolveContext::hasFriction() const {
   for (std::size_t i = 0; i < problem->contacts.size(); ++i)
-    if ((ignored.empty() || !ignored[i]) && problem->contacts[i].type == ContactType::kFrictional && mu[i] > 0.0)
+    if ((ignored.empty() || !ignored[i]) && hasSlidingFriction(problem->contacts[i].type) && mu[i] > 0.0)
       return true;
   return false;
 }
@@ -51,9 +52,20 @@ bool pyramidModel(const SolverParams& params) {
 constexpr double kAutoTightTolerance = 1e-4;  // tolerance below this: newton or apgd
 constexpr int kAutoNewtonMaxRows = 200;       // newton up to this many rows, apgd above
 
+// Torsional or rolling contacts: only nlgs has their local step.
+bool hasExtendedFriction(const Problem& problem) {
+  for (const Contact& c : problem.contacts)
+    if (c.type == ContactType::kTorsional || c.type == ContactType::kRolling) return true;
+  return false;
+}
+
 SolverKind resolveKind(SolverKind kind, const SolveContext& ctx) {
   if (kind != SolverKind::kAuto) return kind;
+  if (hasExtendedFriction(*ctx.problem)) return SolverKind::kNlgs;
   if (!ctx.hasFriction() || pyramidModel(*ctx.params)) return SolverKind::kPgs;
+  // The unbuilt solve (body form, build_lcp = false) is Gauss-Seidel, as in SOFA: nlgs at
+  // any tolerance (newton and apgd would need the assembled W).
+  if (ctx.problem->bodies) return SolverKind::kNlgs;
   const SolverParams& p = *ctx.params;
   if (p.stopping_rule == StoppingRule::kResidual && p.tolerance < kAutoTightTolerance)
     return ctx.problem->rowCount() <= kAutoNewtonMaxRows ? SolverKind::kNewton : SolverKind::kApgd;
@@ -98,7 +110,7 @@ std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<in
   std::vector<bool> ignored(problem.contacts.size(), false);
   if (min_w <= 0.0) return ignored;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const double w_nn = diagonalBlock(problem.W, offsets[i], 1)(0, 0) + regularization;
+    const double w_nn = contactDiagonalBlock(problem, offsets, static_cast<int>(i))(0, 0) + regularization;
     ignored[i] = w_nn <= min_w;
   }
   return ignored;
@@ -112,7 +124,7 @@ void zeroInactiveRows(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     const Contact& c = problem.contacts[i];
     if (ctx.ignored[i]) {
       lambda.segment(off, c.rows).setZero();
-    } else if (c.type == ContactType::kFrictional && ctx.mu[i] == 0.0) {
+    } else if (hasSlidingFriction(c.type) && ctx.mu[i] == 0.0) {
       lambda.segment(off + 1, 2).setZero();
     }
   }
@@ -130,6 +142,21 @@ int dropContactsAboveMaxF(SolveContext& ctx, const Eigen::VectorXd& lambda, doub
     }
   }
   return dropped;
+}
+
+// Solvers that run on the body form without assembling W (build_lcp = false).
+bool runsUnbuilt(SolverKind kind) {
+  return kind == SolverKind::kAuto || kind == SolverKind::kPgs || kind == SolverKind::kNlgs;
+}
+
+// The problem with the body form replaced by its assembled, block-sparse W.
+Problem assembledProblem(const Problem& problem) {
+  Problem out;
+  out.contacts = problem.contacts;
+  out.d_free = problem.d_free;
+  out.name = problem.name;
+  out.W = problem.bodies->assemble();
+  return out;
 }
 
 // The kernel could not run, or ended on something that is not an approximate solution:
@@ -188,7 +215,13 @@ SolveResult ContactSolver::solve(const Problem& input) {
     result.message = err;
     return result;
   }
-  const Problem& problem = stabilize ? stabilized : input;
+  const Problem& stated = stabilize ? stabilized : input;
+  // build_lcp with the body form: Gauss-Seidel runs unbuilt on it (false); every other case
+  // assembles the block-sparse W once and solves as usual.
+  const bool unbuilt = stated.bodies && !params_.build_lcp && runsUnbuilt(params_.solver);
+  Problem assembled;
+  if (stated.bodies && !unbuilt) assembled = assembledProblem(stated);
+  const Problem& problem = stated.bodies && !unbuilt ? assembled : stated;
 
   SolveContext ctx;
   ctx.problem = &problem;
@@ -205,6 +238,16 @@ SolveResult ContactSolver::solve(const Problem& input) {
 
   const SolverKind kind = resolveKind(params_.solver, ctx);
   result.solver = solverName(kind);
+  if (kind != SolverKind::kNlgs && hasExtendedFriction(problem)) {
+    result.status = SolveStatus::kNotApplicable;
+    result.message = std::string(solverName(kind)) +
+                     " does not solve torsional or rolling friction (4- and 6-row contacts); use nlgs or auto";
+    result.forces = Eigen::VectorXd::Zero(problem.rowCount());
+    result.d = problem.d_free;
+    result.states.assign(problem.contacts.size(), ContactState::kOpen);
+    result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
+    return result;
+  }
   Eigen::VectorXd lambda = initialGuess(problem, ctx.offsets);
   KernelReport report;
   // maxF: drop the contacts above the limit and solve the rest again, so the remaining
@@ -253,9 +296,18 @@ SolveResult ContactSolver::solve(const Problem& input) {
                       result.solver + " solved the Coulomb disc";
   }
   result.residual_history = std::move(report.history);
+  result.unbuilt = unbuilt;
   if (!params_.build_lcp) {
-    result.message += std::string(result.message.empty() ? "" : "; ") +
-                      "build_lcp=false needs the body form of the compliance; solved on the assembled W";
+    std::string note;
+    if (unbuilt) {
+      note = "unbuilt solve on the body form (" + std::to_string(stated.bodies->bodyCount()) + " bodies)";
+    } else if (stated.bodies) {
+      note = std::string("build_lcp=false: ") + solverName(params_.solver) +
+             " needs the assembled W; assembled it from the body form (block-sparse)";
+    } else {
+      note = "build_lcp=false needs the body form of the compliance; solved on the assembled W";
+    }
+    result.message += std::string(result.message.empty() ? "" : "; ") + note;
   }
   if (!failedToRun(result.status)) rememberForces(problem, ctx.offsets, result.forces);
   result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();

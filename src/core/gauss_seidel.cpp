@@ -9,7 +9,9 @@
 // (λ = max(0, λ - d / D_nn)), a linear solve for bilateral rows (λ -= D⁻¹ d), the local
 // Coulomb problem for a frictional contact (coulombLocalStep), or the local polygon
 // problem for a pyramid (polygonLocalStep). Then d is updated with W's columns of c
-// (dense) or re-read from c's block row (block-sparse) before the next contact. A fixed
+// (dense) or re-read from c's block row (block-sparse) before the next contact; the unbuilt
+// solve (body form, build_lcp = false) updates the bodies' corrections instead (BodyAccess,
+// with its derivation). A fixed
 // point of the sweep satisfies every contact's law with every other contact's force, so
 // it solves the problem.
 //
@@ -27,6 +29,7 @@
 // ill-conditioned stacks (use newton there).
 #include "friction_pyramid.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
@@ -48,7 +51,7 @@ constexpr double kLocalTolerance = 1e-14;
 // Maintained d drifts by round-off; refresh it exactly this often (sweeps).
 constexpr int kRefreshInterval = 50;
 
-enum class LocalKind : std::uint8_t { kSkip, kNormalOnly, kCoulomb, kBilateral, kPolygon };
+enum class LocalKind : std::uint8_t { kSkip, kNormalOnly, kCoulomb, kBilateral, kPolygon, kCoulombExtended };
 
 // What a contact's local step needs, computed once per solve. Stored flat, one per contact.
 struct LocalBlock {
@@ -70,6 +73,16 @@ struct LocalBlock {
   Eigen::Matrix3d D_inverse = Eigen::Matrix3d::Zero();
   Eigen::MatrixXd bilateral_block;    // D, bilateral only
   Eigen::MatrixXd bilateral_inverse;  // D⁻¹, bilateral only
+  // Torsional (4 rows) and rolling (6 rows) contacts: the whole diagonal block (zero
+  // padded), the coefficients, 1 / D_ss, and the rolling 2×2 block R = Q diag(a) Qᵀ.
+  Eigen::Matrix<double, 6, 6> D_full = Eigen::Matrix<double, 6, 6>::Zero();
+  double mu_torsional = 0.0;
+  double mu_rolling = 0.0;
+  double inv_spin = 0.0;
+  Eigen::Matrix2d roll_basis = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d roll_eigen = Eigen::Vector2d::Zero();
+  bool roll_symmetric = true;
+  double roll_step = 0.0;
 };
 
 // Minimises ½ xᵀT x + bᵀx over the disc |x| <= radius, T = Q diag(a) Qᵀ symmetric.
@@ -83,15 +96,15 @@ struct LocalBlock {
 // at the left end climbs monotonically and quadratically to the root; a bisection
 // safeguard covers the indefinite case. h'(ν) = Σ g_i²/(a_i+ν)³ / |x|³ uses products,
 // not pow.
-Eigen::Vector2d solveDiscProblem(const LocalBlock& blk, const Eigen::Vector2d& b, double radius) {
+Eigen::Vector2d solveDiscProblem(const Eigen::Matrix2d& basis, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                 double radius) {
   if (radius <= 0.0) return Eigen::Vector2d::Zero();
-  const Eigen::Vector2d g = blk.tangent_basis.transpose() * b;
-  const Eigen::Vector2d& a = blk.tangent_eigen;
+  const Eigen::Vector2d g = basis.transpose() * b;
   const double a_min = std::min(a[0], a[1]);
   const double a_max = std::max(a[0], a[1]);
   if (a_min > 0.0) {
     const Eigen::Vector2d interior(-g[0] / a[0], -g[1] / a[1]);
-    if (interior.norm() <= radius) return blk.tangent_basis * interior;
+    if (interior.norm() <= radius) return basis * interior;
   }
   const double g_norm = std::sqrt(g[0] * g[0] + g[1] * g[1]);
   if (g_norm == 0.0) return Eigen::Vector2d::Zero();  // no preferred direction, no drive
@@ -118,7 +131,11 @@ Eigen::Vector2d solveDiscProblem(const LocalBlock& blk, const Eigen::Vector2d& b
   const Eigen::Vector2d x(-g[0] * e0, -g[1] * e1);
   // Round-off can leave |x| a hair outside; the cone constraint is the hard one.
   const double n = x.norm();
-  return blk.tangent_basis * (n > radius ? Eigen::Vector2d(x * (radius / n)) : x);
+  return basis * (n > radius ? Eigen::Vector2d(x * (radius / n)) : x);
+}
+
+Eigen::Vector2d solveDiscProblem(const LocalBlock& blk, const Eigen::Vector2d& b, double radius) {
+  return solveDiscProblem(blk.tangent_basis, blk.tangent_eigen, b, radius);
 }
 
 // Projects the tangential force onto the disc of the given radius.
@@ -208,6 +225,30 @@ void polygonLocalStep(const LocalBlock& blk, const FrictionPolygon& polygon, con
   lambda_c[2] = next_t[1];
 }
 
+// The torsional/rolling part of a contact's local data (D is its whole diagonal block).
+std::string prepareExtendedRows(const Contact& c, const Eigen::MatrixXd& D, const std::string& where,
+                                LocalBlock& blk) {
+  blk.D_full.setZero();
+  blk.D_full.topLeftCorner(c.rows, c.rows) = D;
+  blk.mu_torsional = c.mu_torsional;
+  blk.mu_rolling = c.type == ContactType::kRolling ? c.mu_rolling : 0.0;
+  if (blk.mu_torsional > 0.0) {
+    if (!(D(3, 3) > 0.0)) return where + " has a torsional self-compliance W_ss <= 0";
+    blk.inv_spin = 1.0 / D(3, 3);
+  }
+  if (blk.mu_rolling > 0.0) {
+    const Eigen::Matrix2d R = D.block<2, 2>(4, 4);
+    const double scale = R.cwiseAbs().maxCoeff();
+    blk.roll_symmetric = std::abs(R(0, 1) - R(1, 0)) <= 1e-12 * scale;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (R + R.transpose()));
+    blk.roll_basis = eig.eigenvectors();
+    blk.roll_eigen = eig.eigenvalues();
+    if (!(blk.roll_eigen.maxCoeff() > 0.0)) return where + " has a rolling block of W with no positive eigenvalue";
+    blk.roll_step = 1.0 / blk.roll_eigen.maxCoeff();
+  }
+  return "";
+}
+
 // Builds the per-contact local data; returns a failure message for a diagonal that the
 // local step would divide by (SOFA divides anyway and returns NaN).
 // `polygon` (pyramid models) turns frictional contacts into polygon steps.
@@ -226,7 +267,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.kind = LocalKind::kSkip;
       continue;
     }
-    Eigen::MatrixXd D = diagonalBlock(problem.W, blk.offset, c.rows);
+    Eigen::MatrixXd D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
     D.diagonal().array() += r;
     const std::string where = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
     if (c.type == ContactType::kBilateral) {
@@ -243,15 +284,20 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       return where + " has W_nn = " + value + " <= 0; set minW or regularizationTerm";
     }
     blk.inv_nn = 1.0 / D(0, 0);
-    if (c.type == ContactType::kFrictionless || blk.mu == 0.0) {
+    const bool extended = c.type == ContactType::kTorsional || c.type == ContactType::kRolling;
+    if (c.type == ContactType::kFrictionless || (blk.mu == 0.0 && !extended)) {
       blk.kind = LocalKind::kNormalOnly;
       continue;
     }
     blk.kind = polygon != nullptr ? LocalKind::kPolygon : LocalKind::kCoulomb;
-    blk.D = D;
+    if (extended) {
+      if (std::string err = prepareExtendedRows(c, D, where, blk); !err.empty()) return err;
+      blk.kind = LocalKind::kCoulombExtended;
+    }
+    blk.D = D.topLeftCorner<3, 3>();
     blk.coupled = D(0, 1) != 0.0 || D(0, 2) != 0.0 || D(1, 0) != 0.0 || D(2, 0) != 0.0;
     {
-      const Eigen::Matrix3d D3 = D;
+      const Eigen::Matrix3d D3 = D.topLeftCorner<3, 3>();
       Eigen::FullPivLU<Eigen::Matrix3d> lu(D3);
       // Only a well-conditioned block: the one-shot solution must be as accurate as the
       // iteration it replaces.
@@ -355,6 +401,132 @@ struct SparseAccess {
   const LocalBlock* first_block = nullptr;
 };
 
+// ---- The unbuilt solve (SolverParams::build_lcp = false, Problem::bodies) ----------------
+//
+// Why this is the same iteration as the sweep on the assembled W. The body form
+// (body_compliance.h) gives W_ij = Σ_{bodies b shared by i and j} J_ib C_b J_jbᵀ, so
+//   d = (W + rI) λ + d_free,   d_c = Σ_{sides s of c} J_cs u_b(s) + d_free_c + r λ_c,
+//   u_b = C_b Σ_{contacts k touching b} J_kbᵀ λ_k       (the body's correction)
+// (+ the body form's extra diagonal, softness, beside r): a contact's d needs only the u of
+// the two bodies it touches. The built sweep visits contact c, reads its maintained d_c,
+// takes the local step on D_c = W_cc + rI and adds the column block (W + rI)_:c Δλ_c to d.
+// Here the local step and D_c are the same (D_c = Σ_{s,t on one body} J_cs C_b J_ctᵀ + rI,
+// formed once per solve), d_c is read through u, and adding W_:c Δλ_c to every d is exactly
+// u_b += C_b J_cbᵀ Δλ_c on c's bodies: every later contact then reads the d the built sweep
+// would have maintained. Same contact order, same local steps, same sor, stopping rule,
+// minW, maxF and warm start, so the iterates are those of pgs/nlgs on the assembled W up to
+// the round-off of a different summation order. This is the sequential-impulse form
+// (Catto's Box2D: per body a velocity correction, per contact an impulse): a sweep costs
+// O(rows · 6) and the storage O(bodies + rows), where the built W needs O(contacts ×
+// neighbours) (block-sparse) or O(rows²) (dense) to store and as much per sweep.
+struct BodyAccess {
+  const BodyCompliance& B;
+  const SolveContext& ctx;
+  std::vector<BodyVector> u;  // per body: C_b Σ Jᵀ λ, maintained
+  Eigen::VectorXd d;          // the whole d, formed only for the residual
+  const LocalBlock* first_block = nullptr;
+
+  BodyAccess(const BodyCompliance& bodies, const SolveContext& context) : B(bodies), ctx(context) {}
+
+  // J_row · v for row k of a row-major rows × 6 block.
+  static double rowDot(const JacobianBlock& J, int k, const BodyVector& v) {
+    const double* j = J.data() + 6 * k;
+    return j[0] * v[0] + j[1] * v[1] + j[2] * v[2] + j[3] * v[3] + j[4] * v[4] + j[5] * v[5];
+  }
+  // d of contact `ci` (rows from `offset`) from u.
+  void rowsD(int ci, int offset, const double* lambda, double* out) const {
+    const ContactJacobian& c = B.contacts[ci];
+    const bool extra = B.diagonal.size() != 0;
+    for (int k = 0; k < c.rows; ++k) {
+      double v = ctx.problem->d_free[offset + k] + ctx.regularization * lambda[offset + k];
+      if (extra) v += B.diagonal[offset + k] * lambda[offset + k];
+      if (c.body_a >= 0) v += rowDot(c.jacobian_a, k, u[c.body_a]);
+      if (c.body_b >= 0) v += rowDot(c.jacobian_b, k, u[c.body_b]);
+      out[k] = v;
+    }
+  }
+
+  void refresh(const Eigen::VectorXd& lambda) { B.bodyResponse(lambda, &u); }
+  void contactD(const LocalBlock& blk, const Eigen::VectorXd& lambda, double* out) const {
+    rowsD(static_cast<int>(&blk - first_block), blk.offset, lambda.data(), out);
+  }
+  void applyDelta(const LocalBlock& blk, const double* delta) {
+    bool moved = false;
+    for (int k = 0; k < blk.rows; ++k) moved = moved || delta[k] != 0.0;
+    if (!moved) return;
+    const ContactJacobian& c = B.contacts[&blk - first_block];
+    const int bodies[2] = {c.body_a, c.body_b};
+    const JacobianBlock* jacobians[2] = {&c.jacobian_a, &c.jacobian_b};
+    for (int s = 0; s < 2; ++s) {
+      if (bodies[s] < 0) continue;
+      BodyVector f = BodyVector::Zero();  // J_sᵀ Δλ
+      const double* j = jacobians[s]->data();
+      for (int k = 0; k < blk.rows; ++k)
+        for (int q = 0; q < 6; ++q) f[q] += j[6 * k + q] * delta[k];
+      u[bodies[s]].noalias() += B.body_compliance[bodies[s]] * f;
+    }
+  }
+  const Eigen::VectorXd& currentD(const Eigen::VectorXd& lambda) {
+    d.resize(lambda.size());
+    int offset = 0;
+    for (int ci = 0; ci < B.contactCount(); ++ci) {
+      rowsD(ci, offset, lambda.data(), d.data() + offset);
+      offset += B.contacts[ci].rows;
+    }
+    return d;
+  }
+};
+
+// Local step of a torsional (4-row) or rolling (6-row) contact: block Gauss-Seidel inside
+// the contact. First the Coulomb step on the sliding rows (the spin and rolling forces act
+// through d_c), then the spin row, λ_s = clamp(λ_s - u_s / D_ss, ±μ_tor λ_n), then the
+// rolling pair as a disc problem of radius μ_roll λ_n on its 2×2 block, each on the d the
+// previous rows' changes left (u_x = d_x + D_x,prev Δ_prev) and bounded by the new λ_n. Its
+// fixed point satisfies every row's law with the others' forces: the contact's law.
+void extendedLocalStep(const LocalBlock& blk, double omega, const double* d_c, double* lambda_c, double* delta) {
+  Eigen::Map<Eigen::Vector3d> sliding(lambda_c);
+  const Eigen::Vector3d old = sliding;
+  const Eigen::Vector3d b = Eigen::Map<const Eigen::Vector3d>(d_c) - blk.D * old;
+  Eigen::Vector3d next = old;
+  if (blk.mu > 0.0) {
+    coulombLocalStep(blk, b, next);
+  } else {  // frictionless sliding rows: the normal step alone
+    next[0] = std::max(0.0, old[0] - d_c[0] * blk.inv_nn);
+    next[1] = next[2] = 0.0;
+  }
+  if (omega != 1.0) {
+    next = old + omega * (next - old);
+    projectOntoCone(blk.mu, next.data());
+  }
+  for (int k = 0; k < 3; ++k) delta[k] = next[k] - old[k];
+  sliding = next;
+  const auto& D = blk.D_full;
+  // Spin about the normal.
+  const double u_s = d_c[3] + D(3, 0) * delta[0] + D(3, 1) * delta[1] + D(3, 2) * delta[2];
+  const double spin_bound = blk.mu_torsional * lambda_c[0];
+  double spin = blk.mu_torsional > 0.0 ? std::clamp(lambda_c[3] - u_s * blk.inv_spin, -spin_bound, spin_bound) : 0.0;
+  if (omega != 1.0) spin = std::clamp(lambda_c[3] + omega * (spin - lambda_c[3]), -spin_bound, spin_bound);
+  delta[3] = spin - lambda_c[3];
+  lambda_c[3] = spin;
+  if (blk.rows < 6) return;
+  // Rolling about the two tangents.
+  Eigen::Vector2d u_r(d_c[4], d_c[5]);
+  for (int k = 0; k < 4; ++k) u_r += D.block<2, 1>(4, k) * delta[k];
+  const Eigen::Vector2d old_r(lambda_c[4], lambda_c[5]);
+  const Eigen::Matrix2d R = D.block<2, 2>(4, 4);
+  const double roll_bound = blk.mu_rolling * lambda_c[0];
+  Eigen::Vector2d next_r = Eigen::Vector2d::Zero();
+  if (roll_bound > 0.0) {
+    next_r = blk.roll_symmetric ? solveDiscProblem(blk.roll_basis, blk.roll_eigen, u_r - R * old_r, roll_bound)
+                                : clampToDisc(old_r - blk.roll_step * u_r, roll_bound);
+  }
+  if (omega != 1.0) next_r = clampToDisc(old_r + omega * (next_r - old_r), roll_bound);
+  delta[4] = next_r[0] - old_r[0];
+  delta[5] = next_r[1] - old_r[1];
+  lambda_c[4] = next_r[0];
+  lambda_c[5] = next_r[1];
+}
+
 // One contact's local step on its current d with over-relaxation ω (see the top of the
 // file); returns the change of λ_c in `delta`.
 void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, double omega, const double* d_c,
@@ -384,6 +556,9 @@ void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, double ome
       lambda = next;
       break;
     }
+    case LocalKind::kCoulombExtended:
+      extendedLocalStep(blk, omega, d_c, lambda_c, delta);
+      break;
     case LocalKind::kPolygon: {
       const Eigen::Vector3d old = Eigen::Map<const Eigen::Vector3d>(lambda_c);
       polygonLocalStep(blk, *polygon, d_c, omega, lambda_c);
@@ -411,6 +586,11 @@ double sofaContactError(const LocalBlock& blk, const double* delta) {
     case LocalKind::kNormalOnly: return std::abs(delta[0]) / blk.inv_nn;
     case LocalKind::kCoulomb:
     case LocalKind::kPolygon: return (blk.D * Eigen::Map<const Eigen::Vector3d>(delta)).norm();
+    case LocalKind::kCoulombExtended: {
+      Eigen::Matrix<double, 6, 1> v = Eigen::Matrix<double, 6, 1>::Zero();
+      v.head(blk.rows) = Eigen::Map<const Eigen::VectorXd>(delta, blk.rows);
+      return (blk.D_full * v).norm();
+    }
     case LocalKind::kBilateral: {
       double sum = 0.0;
       for (int i = 0; i < blk.rows; ++i) {
@@ -520,6 +700,11 @@ KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
     report.status = SolveStatus::kZeroDiagonal;
     report.message = err;
     return report;
+  }
+  if (const BodyCompliance* bodies = ctx.problem->bodies.get()) {  // build_lcp = false
+    BodyAccess access(*bodies, ctx);
+    access.first_block = blocks.data();
+    return sweepUntilDone(ctx, blocks, access, lambda, polygon);
   }
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W)) {
     DenseAccess access{*dense, ctx, Eigen::VectorXd()};

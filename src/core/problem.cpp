@@ -1,5 +1,7 @@
 #include "lcp_contact_solver/core/problem.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -12,6 +14,8 @@ int rowsForType(ContactType type) {
     case ContactType::kFrictional: return 3;
     case ContactType::kFrictionless: return 1;
     case ContactType::kBilateral: return 1;
+    case ContactType::kTorsional: return 4;
+    case ContactType::kRolling: return 6;
   }
   return 1;
 }
@@ -215,6 +219,12 @@ std::string validateContacts(const Problem& problem) {
       case ContactType::kFrictionless:
         if (c.rows != 1) return name + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
         break;
+      case ContactType::kTorsional:
+      case ContactType::kRolling:
+        if (c.rows != rowsForType(c.type))
+          return name + " is " + (c.type == ContactType::kTorsional ? "torsional" : "rolling") + " but has " +
+                 std::to_string(c.rows) + " rows (" + std::to_string(rowsForType(c.type)) + " expected)";
+        break;
       case ContactType::kBilateral:
         if (c.rows < 1 || c.rows > 6) return name + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
         break;
@@ -225,6 +235,10 @@ std::string validateContacts(const Problem& problem) {
     // Negative means "use the default": only exactly the sentinel range is allowed, so a
     // typo like -0.3 is not silently replaced by the default.
     if (c.mu < 0.0 && c.mu != -1.0) return name + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
+    if (!std::isfinite(c.mu_torsional) || c.mu_torsional < 0.0)
+      return name + " has a negative or non-finite torsional friction coefficient";
+    if (!std::isfinite(c.mu_rolling) || c.mu_rolling < 0.0)
+      return name + " has a negative or non-finite rolling friction coefficient";
     if (!std::isfinite(c.gap)) return name + " has a non-finite gap";
     if (!std::isfinite(c.erp) || (c.erp != Contact::kUseDefault && (c.erp < 0.0 || c.erp > 1.0)))
       return name + " has erp " + std::to_string(c.erp) + " outside [0, 1] (use -1 for the default)";
@@ -232,6 +246,23 @@ std::string validateContacts(const Problem& problem) {
       return name + " has a negative softness " + std::to_string(c.softness) + " (use -1 for the default)";
   }
   return "";
+}
+
+// The body form instead of W: W must be empty, one Jacobian entry per contact with the
+// contact's rows, and the body form consistent in itself.
+std::string validateBodyForm(const Problem& problem) {
+  const BodyCompliance& bodies = *problem.bodies;
+  if (complianceRows(problem.W) != 0 || complianceCols(problem.W) != 0)
+    return "the problem gives both an assembled W and the body form; give one";
+  if (bodies.contactCount() != static_cast<int>(problem.contacts.size()))
+    return "the body form has " + std::to_string(bodies.contactCount()) + " contacts, the problem has " +
+           std::to_string(problem.contacts.size());
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i)
+    if (bodies.contacts[i].rows != problem.contacts[i].rows)
+      return "the body form gives contact " + std::to_string(i) + " (id " + std::to_string(problem.contacts[i].id) +
+             ") " + std::to_string(bodies.contacts[i].rows) + " rows, the contact has " +
+             std::to_string(problem.contacts[i].rows);
+  return bodies.validate();
 }
 
 }  // namespace
@@ -245,6 +276,7 @@ std::string validateProblem(const Problem& problem, int max_rows) {
   if (problem.d_free.size() != rows)
     return "d_free has " + std::to_string(problem.d_free.size()) + " entries, the contacts have " + std::to_string(rows) + " rows";
   if (!allFinite(problem.d_free.data(), problem.d_free.size())) return "d_free holds a non-finite value";
+  if (problem.bodies) return validateBodyForm(problem);
   if (complianceRows(problem.W) != rows || complianceCols(problem.W) != rows)
     return "W is " + std::to_string(complianceRows(problem.W)) + "x" + std::to_string(complianceCols(problem.W)) +
            ", the contacts have " + std::to_string(rows) + " rows";

@@ -37,7 +37,7 @@ std::vector<double> effectiveMu(const Problem& problem, double default_mu) {
   std::vector<double> mu(problem.contacts.size(), 0.0);
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const Contact& c = problem.contacts[i];
-    if (c.type == ContactType::kFrictional) mu[i] = c.mu < 0.0 ? default_mu : c.mu;
+    if (hasSlidingFriction(c.type)) mu[i] = c.mu < 0.0 ? default_mu : c.mu;
   }
   return mu;
 }
@@ -48,9 +48,35 @@ bool isIgnored(const std::vector<bool>& ignored, std::size_t i) {
   return !ignored.empty() && ignored[i];
 }
 
+// Torsional and rolling rows: the force minus its projection onto the bound μ_x λ_n after
+// a step against its velocity (the natural map of maximal dissipation with λ_n given).
+double extendedErrorSquared(const Contact& c, const double* lambda, const double* d) {
+  const double spin_bound = c.mu_torsional * std::max(lambda[0], 0.0);
+  const double s = lambda[3] - std::clamp(lambda[3] - d[3], -spin_bound, spin_bound);
+  double sum = s * s;
+  if (c.type == ContactType::kRolling) {
+    const double roll_bound = c.mu_rolling * std::max(lambda[0], 0.0);
+    double x = lambda[4] - d[4], y = lambda[5] - d[5];
+    const double n = norm2(x, y);
+    if (n > roll_bound) {
+      x *= roll_bound / n;
+      y *= roll_bound / n;
+    }
+    sum += (lambda[4] - x) * (lambda[4] - x) + (lambda[5] - y) * (lambda[5] - y);
+  }
+  return sum;
+}
+
 // Squared natural-map error of one contact (see residual.h).
 double contactErrorSquared(const Contact& c, double mu, const double* lambda, const double* d) {
   switch (c.type) {
+    case ContactType::kTorsional:
+    case ContactType::kRolling: {
+      Contact sliding = c;
+      sliding.type = ContactType::kFrictional;
+      sliding.rows = 3;
+      return contactErrorSquared(sliding, mu, lambda, d) + extendedErrorSquared(c, lambda, d);
+    }
     case ContactType::kFrictional: {
       // De Saxcé's modified velocity makes the Coulomb law a cone complementarity problem.
       const double dt = norm2(d[1], d[2]);

@@ -1,5 +1,8 @@
 #include "lcp_contact_solver/core/stabilization.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
+
+#include <memory>
 #include <variant>
 
 namespace lcp_contact_solver {
@@ -84,7 +87,15 @@ std::string applyStabilization(const SolverParams& params, Problem* problem) {
     softness[i] = effectiveSoftness(c, params);
     soft = soft || softness[i] > 0.0;
   }
-  if (soft) addToDiagonal(offsets, softness, &problem->W);
+  if (soft && problem->bodies) {
+    // The body form: softness joins its extra diagonal (a copy: the input's is shared).
+    auto bodies = std::make_shared<BodyCompliance>(*problem->bodies);
+    if (bodies->diagonal.size() == 0) bodies->diagonal = Eigen::VectorXd::Zero(offsets.back());
+    for (std::size_t i = 0; i < softness.size(); ++i) bodies->diagonal[offsets[i]] += softness[i];
+    problem->bodies = std::move(bodies);
+  } else if (soft) {
+    addToDiagonal(offsets, softness, &problem->W);
+  }
   return "";
 }
 

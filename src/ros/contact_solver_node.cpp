@@ -62,8 +62,10 @@ void ContactSolverNode::setUpTopics() {
   sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(queue), contacts_sub_,
                                                                         compliance_sub_);
   sync_->registerCallback(&ContactSolverNode::onPair, this);
-  contacts_sub_.subscribe(nh_, "contacts", queue);
-  compliance_sub_.subscribe(nh_, "compliance", queue);
+  // TCP_NODELAY: without it the sender's kernel batches small messages (Nagle), and at
+  // rates of ~1 kHz bursts overflow the queues (bench/soak.sh: a third of the pairs lost).
+  contacts_sub_.subscribe(nh_, "contacts", queue, ros::TransportHints().tcpNoDelay());
+  compliance_sub_.subscribe(nh_, "compliance", queue, ros::TransportHints().tcpNoDelay());
 
   const double period = std::min(0.25, active_.pairing_window / 4.0);
   timer_ = nh_.createTimer(ros::Duration(period), &ContactSolverNode::onTimer, this);

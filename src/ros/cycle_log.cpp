@@ -32,7 +32,8 @@ std::string cycleSummary(const lcs::Problem& problem, const lcs::SolveResult& re
                          const std::vector<double>& mu) {
   std::ostringstream out;
   out << problem.contacts.size() << " contacts, " << problem.rowCount() << " rows ("
-      << (std::holds_alternative<Eigen::MatrixXd>(problem.W) ? "dense" : "block-sparse") << " W); " << result.solver
+      << (problem.bodies ? "bodies, no" : std::holds_alternative<Eigen::MatrixXd>(problem.W) ? "dense" : "block-sparse")
+      << " W); " << result.solver
       << ": " << lcs::statusName(result.status) << " after " << result.iterations << " iterations, residual "
       << result.residual << ", " << result.solve_time * 1e3 << " ms";
   double error = 0.0;

@@ -1,5 +1,7 @@
 #include "lcp_contact_solver/ros/markers.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -94,7 +96,7 @@ visualization_msgs::Marker frictionCones(const std_msgs::Header& header, const s
   m.scale.x = m.scale.y = m.scale.z = 1.0;
   const double h = options.cone_height;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    if (problem.contacts[i].type != lcs::ContactType::kFrictional || mu[i] <= 0.0) continue;
+    if (!lcs::hasSlidingFriction(problem.contacts[i].type) || mu[i] <= 0.0) continue;
     const ContactFrame& f = frames[i];
     std_msgs::ColorRGBA color = stateColor(result.states[i]);
     color.a = 0.4f;
@@ -135,7 +137,7 @@ void addHeatmaps(const std_msgs::Header& header, const lcs::Problem& problem, co
                  const DisplayOptions& options, visualization_msgs::MarkerArray* markers) {
   if (!options.show_w_heatmap || options.showCellWidth <= 0.0) return;
   const int n = std::min(problem.rowCount(), options.heatmap_max_rows);
-  const Eigen::MatrixXd w = lcs::diagonalBlock(problem.W, 0, n);  // the leading n x n window
+  const Eigen::MatrixXd w = lcs::leadingComplianceWindow(problem, n);  // the leading n x n window (W or bodies)
   markers->markers.push_back(heatmap(header, kNsComplianceHeatmap, w, 0, options));
   // λ as one column right of W, one empty column between.
   markers->markers.push_back(heatmap(header, kNsLambdaHeatmap, result.forces.head(n), n + 1, options));

@@ -2,6 +2,7 @@
 
 #include "lcp_contact_solver/core/contact_frame.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 
 #include <Eigen/Geometry>
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <set>
 #include <utility>
@@ -60,6 +62,15 @@ int contactRows(const lcs::ContactPoint& c, std::string* error) {
       }
       return fixed;
     }
+    case lcs::ContactPoint::TORSIONAL:
+    case lcs::ContactPoint::ROLLING: {
+      const int fixed = c.type == lcs::ContactPoint::TORSIONAL ? 4 : 6;
+      if (c.rows != 0 && static_cast<int>(c.rows) != fixed) {
+        *error = "has rows=" + std::to_string(c.rows) + " but its type has " + std::to_string(fixed);
+        return -1;
+      }
+      return fixed;
+    }
     case lcs::ContactPoint::BILATERAL:
       if (c.rows < 1 || c.rows > 6) {
         *error = "is bilateral with rows=" + std::to_string(c.rows) + " (1..6 expected)";
@@ -96,12 +107,18 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
   if (static_cast<int>(msg.d_free.size()) != rows)
     return "has " + std::to_string(msg.d_free.size()) + " d_free values for " + std::to_string(rows) + " rows";
   error = checkMu(msg.mu);
+  if (error.empty() && (!std::isfinite(msg.mu_torsional) || msg.mu_torsional < 0.0))
+    error = "has a negative or non-finite mu_torsional";
+  if (error.empty() && (!std::isfinite(msg.mu_rolling) || msg.mu_rolling < 0.0))
+    error = "has a negative or non-finite mu_rolling";
   if (error.empty()) error = checkStabilization(msg);
   if (!error.empty()) return error;
   contact->id = msg.id;
   contact->type = static_cast<lcs::ContactType>(msg.type);
   contact->rows = rows;
   contact->mu = msg.mu;
+  contact->mu_torsional = msg.mu_torsional;
+  contact->mu_rolling = msg.mu_rolling;
   contact->gap = msg.gap;
   contact->erp = msg.erp;
   contact->softness = msg.softness;
@@ -192,14 +209,66 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
   return "";
 }
 
+// The body form: every size is checked against the contacts before anything is allocated;
+// finiteness is checked by validateProblem (BodyCompliance::validate) afterwards.
+std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offsets,
+                       std::shared_ptr<const lcs::BodyCompliance>* out) {
+  const std::size_t nc = offsets.size() - 1;
+  if (msg.body_compliance.size() % 36 != 0)
+    return "the body form has " + std::to_string(msg.body_compliance.size()) +
+           " body_compliance values, not 36 (a 6x6 block) per body";
+  const std::size_t nb = msg.body_compliance.size() / 36;
+  if (msg.contact_bodies.size() != 2 * nc)
+    return "the body form has " + std::to_string(msg.contact_bodies.size()) + " contact_bodies, " +
+           std::to_string(2 * nc) + " expected (body_a and body_b per contact)";
+  std::size_t jacobian_values = 0;
+  for (std::size_t i = 0; i < nc; ++i) {
+    for (int s = 0; s < 2; ++s) {
+      const std::int32_t b = msg.contact_bodies[2 * i + s];
+      if (b < -1 || (b >= 0 && static_cast<std::size_t>(b) >= nb))
+        return "the body form's contact " + std::to_string(i) + " names " + (s == 0 ? "body_a " : "body_b ") +
+               std::to_string(b) + ", outside -1.." + std::to_string(static_cast<long long>(nb) - 1) + " (-1 = static)";
+      if (b >= 0) jacobian_values += static_cast<std::size_t>(offsets[i + 1] - offsets[i]) * 6;
+    }
+  }
+  if (msg.jacobian.size() != jacobian_values)
+    return "the body form has " + std::to_string(msg.jacobian.size()) + " jacobian values, its contacts need " +
+           std::to_string(jacobian_values) + " (rows x 6 per side with a body)";
+  if (!msg.body_diagonal.empty() && msg.body_diagonal.size() != static_cast<std::size_t>(offsets.back()))
+    return "the body form has " + std::to_string(msg.body_diagonal.size()) + " body_diagonal values, " +
+           std::to_string(offsets.back()) + " rows (or none) expected";
+  auto bodies = std::make_shared<lcs::BodyCompliance>();
+  bodies->body_compliance.resize(nb);
+  using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+  for (std::size_t b = 0; b < nb; ++b) bodies->body_compliance[b] = Eigen::Map<const RowMajor6>(msg.body_compliance.data() + 36 * b);
+  bodies->contacts.resize(nc);
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < nc; ++i) {
+    lcs::ContactJacobian& c = bodies->contacts[i];
+    c.rows = offsets[i + 1] - offsets[i];
+    c.body_a = msg.contact_bodies[2 * i];
+    c.body_b = msg.contact_bodies[2 * i + 1];
+    for (lcs::JacobianBlock* J : {&c.jacobian_a, &c.jacobian_b}) {
+      if ((J == &c.jacobian_a ? c.body_a : c.body_b) < 0) continue;
+      J->resize(c.rows, 6);
+      for (int k = 0; k < c.rows * 6; ++k) J->data()[k] = msg.jacobian[next++];  // row-major, as stored
+    }
+  }
+  if (!msg.body_diagonal.empty())
+    bodies->diagonal = Eigen::Map<const Eigen::VectorXd>(msg.body_diagonal.data(), msg.body_diagonal.size());
+  *out = std::move(bodies);
+  return "";
+}
+
 std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& offsets,
-                           lcs::ComplianceMatrix* W) {
+                           lcs::ComplianceMatrix* W, std::shared_ptr<const lcs::BodyCompliance>* bodies) {
   const int rows = offsets.back();
   if (static_cast<std::int64_t>(msg.rows) != rows)
     return "the compliance has rows=" + std::to_string(msg.rows) + ", the contacts have " + std::to_string(rows);
   switch (msg.storage) {
     case lcs::Compliance::STORAGE_DENSE: return readDense(msg, rows, W);
     case lcs::Compliance::STORAGE_BLOCK_SPARSE: return readBlockSparse(msg, offsets, W);
+    case lcs::Compliance::STORAGE_BODIES: return readBodies(msg, offsets, bodies);
     default: return "the compliance has an unknown storage " + std::to_string(msg.storage);
   }
 }
@@ -255,7 +324,7 @@ std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& 
                       int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames) {
   *problem = lcs::Problem();
   std::string error = readContacts(contacts, max_rows, problem, frames);
-  if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W);
+  if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W, &problem->bodies);
   if (error.empty()) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
@@ -280,6 +349,26 @@ lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {
     }
   }
   msg.block_data = sparse.values;  // stored in the same (block-row) order
+  return msg;
+}
+
+lcs::Compliance toComplianceMsg(const lcs::Problem& problem) {
+  if (!problem.bodies) return toComplianceMsg(problem.W);
+  const lcs::BodyCompliance& bodies = *problem.bodies;
+  lcs::Compliance msg;
+  msg.storage = lcs::Compliance::STORAGE_BODIES;
+  msg.rows = static_cast<std::uint32_t>(bodies.rowCount());
+  msg.body_compliance.reserve(36 * bodies.body_compliance.size());
+  for (const lcs::BodyMatrix& C : bodies.body_compliance)
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 6; ++c) msg.body_compliance.push_back(C(r, c));
+  for (const lcs::ContactJacobian& c : bodies.contacts) {
+    msg.contact_bodies.push_back(c.body_a);
+    msg.contact_bodies.push_back(c.body_b);
+    if (c.body_a >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_a.data(), c.jacobian_a.data() + 6 * c.rows);
+    if (c.body_b >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_b.data(), c.jacobian_b.data() + 6 * c.rows);
+  }
+  msg.body_diagonal.assign(bodies.diagonal.data(), bodies.diagonal.data() + bodies.diagonal.size());
   return msg;
 }
 
@@ -311,6 +400,11 @@ lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
     out.tangent1 = toVector3(frame.tangent1);
     out.tangent2 = toVector3(frame.tangent2);
     out.lambda.assign(lambda, lambda + contact.rows);
+    if (contact.type == lcs::ContactType::kTorsional || contact.type == lcs::ContactType::kRolling) {
+      Eigen::Vector3d torque = frame.normal * lambda[3];
+      if (contact.rows == 6) torque += frame.tangent1 * lambda[4] + frame.tangent2 * lambda[5];
+      out.torque = toVector3(torque);
+    }
   }
   msg.wrenches = sumBodyPairWrenches(msg.forces);
   return msg;
@@ -334,7 +428,7 @@ std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::Cont
     }
     const Eigen::Vector3d force = toEigen(f.force);
     force_sum[it->second] += force;
-    torque_sum[it->second] += toEigen(f.position).cross(force);
+    torque_sum[it->second] += toEigen(f.position).cross(force) + toEigen(f.torque);
   }
   for (std::size_t k = 0; k < wrenches.size(); ++k) {
     wrenches[k].wrench.force = toVector3(force_sum[k]);

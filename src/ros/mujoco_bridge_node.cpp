@@ -185,6 +185,13 @@ lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& p
         p.type = ContactPoint::BILATERAL;
         p.mu = 0.0;
         break;
+      case lcs::ContactType::kTorsional:
+      case lcs::ContactType::kRolling:  // the adapter maps MuJoCo's condim 4/6 otherwise
+        p.type = c.type == lcs::ContactType::kTorsional ? ContactPoint::TORSIONAL : ContactPoint::ROLLING;
+        p.mu = c.mu;
+        p.mu_torsional = c.mu_torsional;
+        p.mu_rolling = c.mu_rolling;
+        break;
     }
     p.rows = static_cast<std::uint32_t>(c.rows);
     // gap, erp, softness stay 0: MuJoCo's reference acceleration (solref) is already in d_free.

@@ -63,6 +63,8 @@ std::uint8_t toMsgType(lcs::ContactType type) {
     case lcs::ContactType::kFrictional: return lcs::ContactPoint::FRICTIONAL;
     case lcs::ContactType::kFrictionless: return lcs::ContactPoint::FRICTIONLESS;
     case lcs::ContactType::kBilateral: return lcs::ContactPoint::BILATERAL;
+    case lcs::ContactType::kTorsional: return lcs::ContactPoint::TORSIONAL;
+    case lcs::ContactType::kRolling: return lcs::ContactPoint::ROLLING;
   }
   return lcs::ContactPoint::FRICTIONAL;
 }
@@ -88,6 +90,8 @@ lcs::ContactArray toContactArrayMsg(const scene::StepProblem& step, const std_ms
     out.tangent2 = toVector3(f.t2);
     out.d_free.assign(problem.d_free.data() + offsets[i], problem.d_free.data() + offsets[i + 1]);
     out.mu = c.mu;
+    out.mu_torsional = c.mu_torsional;
+    out.mu_rolling = c.mu_rolling;
     out.gap = c.gap;
     out.erp = c.erp;
     out.softness = c.softness;
@@ -98,7 +102,7 @@ lcs::ContactArray toContactArrayMsg(const scene::StepProblem& step, const std_ms
 }
 
 lcs::Compliance toComplianceMsg(const scene::StepProblem& step, const std_msgs::Header& header) {
-  lcs::Compliance msg = toComplianceMsg(step.problem.W);
+  lcs::Compliance msg = toComplianceMsg(step.problem);  // W, or the body form (compliance: bodies)
   msg.header = header;
   return msg;
 }

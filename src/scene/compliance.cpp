@@ -2,6 +2,7 @@
 #include "lcp_contact_solver/scene/compliance.h"
 
 #include <algorithm>
+#include <memory>
 
 namespace lcp_contact_solver {
 namespace scene {
@@ -50,10 +51,12 @@ RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<Conta
       side.body = bodies[s];
       const double sign = s == 0 ? 1.0 : -1.0;
       const Eigen::Vector3d r = f.point - body.comWorld();
-      for (int k = 0; k < f.rows; ++k) {
+      for (int k = 0; k < std::min(f.rows, 3); ++k) {
         side.J.block<1, 3>(k, 0) = sign * dirs[k].transpose();
         side.J.block<1, 3>(k, 3) = sign * r.cross(dirs[k]).transpose();
       }
+      for (int k = 3; k < f.rows; ++k)  // spin about n, then rolling about t1, t2
+        side.J.block<1, 3>(k, 3) = sign * dirs[k - 3].transpose();
       side.MinvJt = inverse_mass_[side.body] * side.J.transpose();
       body_contacts_[side.body].push_back(static_cast<int>(c));
     }
@@ -64,18 +67,20 @@ ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage stor
   const int nc = contactCount();
   const double dt2 = dt * dt;
   // Block (i, j) = dt² Σ_{dynamic bodies b shared by i and j} J_ib M_b⁻¹ J_jbᵀ.
-  auto addShared = [&](int i, int j, Eigen::Matrix3d* block) {
+  auto addShared = [&](int i, int j, Eigen::Matrix<double, 6, 6>* block) {
     for (const Side& si : contacts_[i].side) {
       if (si.body < 0) continue;
       for (const Side& sj : contacts_[j].side)
-        if (sj.body == si.body) block->noalias() += si.J * sj.MinvJt;
+        if (sj.body == si.body)  // only the rows each contact has (3 for most)
+          block->topLeftCorner(contacts_[i].rows, contacts_[j].rows).noalias() +=
+              si.J.topRows(contacts_[i].rows) * sj.MinvJt.leftCols(contacts_[j].rows);
     }
   };
   if (storage == ComplianceStorage::kDense) {
     Eigen::MatrixXd W = Eigen::MatrixXd::Zero(rowCount(), rowCount());
     for (int i = 0; i < nc; ++i) {
       for (int j : neighbours(i)) {
-        Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+        Eigen::Matrix<double, 6, 6> block = Eigen::Matrix<double, 6, 6>::Zero();
         addShared(i, j, &block);
         W.block(offsets_[i], offsets_[j], contacts_[i].rows, contacts_[j].rows) =
             dt2 * block.topLeftCorner(contacts_[i].rows, contacts_[j].rows);
@@ -89,12 +94,30 @@ ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage stor
   for (int i = 0; i < nc; ++i) {
     W.beginRow();
     for (int j : neighbours(i)) {
-      Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+      Eigen::Matrix<double, 6, 6> block = Eigen::Matrix<double, 6, 6>::Zero();
       addShared(i, j, &block);
       W.addBlock(j, dt2 * block.topLeftCorner(contacts_[i].rows, contacts_[j].rows));
     }
   }
   return W;
+}
+
+BodyCompliance RigidContactModel::bodyCompliance(double dt) const {
+  BodyCompliance out;
+  const double dt2 = dt * dt;
+  out.body_compliance.reserve(inverse_mass_.size());
+  for (const Eigen::Matrix<double, 6, 6>& m : inverse_mass_) out.body_compliance.push_back(dt2 * m);
+  out.contacts.resize(contacts_.size());
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const ContactData& cd = contacts_[c];
+    ContactJacobian& cj = out.contacts[c];
+    cj.rows = cd.rows;
+    cj.body_a = cd.side[0].body;
+    cj.body_b = cd.side[1].body;
+    if (cj.body_a >= 0) cj.jacobian_a = cd.side[0].J.topRows(cd.rows);
+    if (cj.body_b >= 0) cj.jacobian_b = cd.side[1].J.topRows(cd.rows);
+  }
+  return out;
 }
 
 std::vector<int> RigidContactModel::neighbours(int i) const {
@@ -121,6 +144,14 @@ Eigen::VectorXd RigidContactModel::freeViolation(const std::vector<Vector6d>& v_
     d[offsets_[c]] += gapTerm(cd.gap);
   }
   return d;
+}
+
+Eigen::VectorXd RigidContactModel::normalVelocities(const std::vector<Vector6d>& v) const {
+  Eigen::VectorXd vn = Eigen::VectorXd::Zero(contactCount());
+  for (int c = 0; c < contactCount(); ++c)
+    for (const Side& s : contacts_[c].side)
+      if (s.body >= 0) vn[c] += s.J.row(0).dot(v[s.body]);
+  return vn;
 }
 
 std::vector<Vector6d> RigidContactModel::bodyWrenches(const Eigen::VectorXd& lambda) const {
@@ -164,6 +195,8 @@ std::vector<Contact> problemContacts(const Scene& scene, const std::vector<Conta
     contacts[c].type = frames[c].type;
     contacts[c].rows = frames[c].rows;
     contacts[c].mu = frames[c].mu;
+    contacts[c].mu_torsional = frames[c].mu_torsional;
+    contacts[c].mu_rolling = frames[c].mu_rolling;
     contacts[c].gap = frames[c].gap();
     contacts[c].erp = scene.params.erp;
     contacts[c].softness = scene.params.softness;
@@ -177,7 +210,11 @@ Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames
   Problem p;
   p.name = scene.name;
   p.contacts = problemContacts(scene, frames);
-  p.W = model.compliance(dt, storage);
+  if (storage == ComplianceStorage::kBodies) {
+    p.bodies = std::make_shared<const BodyCompliance>(model.bodyCompliance(dt));
+  } else {
+    p.W = model.compliance(dt, storage);
+  }
   p.d_free = model.freeViolation(v_free, dt);
   return p;
 }

@@ -281,7 +281,7 @@ std::vector<ContactFrame> ContactGenerator::generate() {
       ++last_.new_ids;
     }
 
-    const double mu = scene.params.frictionFor(A.name, B.name);
+    const PairContactModel model = scene.params.contactModelFor(A.name, B.name);
     std::vector<std::size_t> order(points.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return slot[x] < slot[y]; });
@@ -296,8 +296,21 @@ std::vector<ContactFrame> ContactGenerator::generate() {
       f.normal = points[i].normal;
       tangentsFromNormal(f.normal, &f.t1, &f.t2);
       f.depth = points[i].depth;
-      f.mu = mu;
-      f.type = mu > 0.0 ? ContactType::kFrictional : ContactType::kFrictionless;
+      // Only the rows the pair asks for (MuJoCo's condim 1 / 3 / 4 / 6).
+      f.mu = model.mu;
+      f.restitution = model.restitution;
+      if (model.mu <= 0.0) {
+        f.type = ContactType::kFrictionless;
+      } else if (model.rolling > 0.0) {
+        f.type = ContactType::kRolling;
+        f.mu_torsional = model.torsional;
+        f.mu_rolling = model.rolling;
+      } else if (model.torsional > 0.0) {
+        f.type = ContactType::kTorsional;
+        f.mu_torsional = model.torsional;
+      } else {
+        f.type = ContactType::kFrictional;
+      }
       f.rows = rowsForType(f.type);
       f.point_local_a = local[i];
       frames.push_back(f);

@@ -296,6 +296,10 @@ Scene loadSceneFromUrdfString(const std::string& urdf_xml, const SceneParams& pa
     require(f.body_a, "friction_pairs");
     require(f.body_b, "friction_pairs");
   }
+  for (const PairRestitution& r : params.restitution_pairs) {
+    require(r.body_a, "restitution_pairs");
+    require(r.body_b, "restitution_pairs");
+  }
   for (const auto& d : params.disable_collisions) {
     require(d.first, "disable_collisions");
     require(d.second, "disable_collisions");

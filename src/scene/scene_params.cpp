@@ -14,6 +14,7 @@ const char* complianceStorageName(ComplianceStorage storage) {
   switch (storage) {
     case ComplianceStorage::kDense: return "dense";
     case ComplianceStorage::kBlockSparse: return "block_sparse";
+    case ComplianceStorage::kBodies: return "bodies";
   }
   return "?";
 }
@@ -21,6 +22,7 @@ const char* complianceStorageName(ComplianceStorage storage) {
 bool parseComplianceStorage(const std::string& name, ComplianceStorage* storage) {
   if (name == "dense") { *storage = ComplianceStorage::kDense; return true; }
   if (name == "block_sparse") { *storage = ComplianceStorage::kBlockSparse; return true; }
+  if (name == "bodies") { *storage = ComplianceStorage::kBodies; return true; }
   return false;
 }
 
@@ -41,6 +43,24 @@ double SceneParams::frictionFor(const std::string& a, const std::string& b) cons
   return mu;
 }
 
+PairContactModel SceneParams::contactModelFor(const std::string& a, const std::string& b) const {
+  auto same = [&](const std::string& x, const std::string& y) { return (x == a && y == b) || (x == b && y == a); };
+  PairContactModel m;
+  m.mu = mu;
+  m.torsional = torsional_friction;
+  m.rolling = rolling_friction;
+  m.restitution = restitution;
+  for (const PairFriction& f : friction_pairs) {
+    if (!same(f.body_a, f.body_b)) continue;
+    m.mu = f.mu;
+    if (f.torsional >= 0.0) m.torsional = f.torsional;
+    if (f.rolling >= 0.0) m.rolling = f.rolling;
+  }
+  for (const PairRestitution& r : restitution_pairs)
+    if (same(r.body_a, r.body_b)) m.restitution = r.restitution;
+  return m;
+}
+
 bool SceneParams::collisionDisabled(const std::string& a, const std::string& b) const {
   for (const auto& d : disable_collisions)
     if ((d.first == a && d.second == b) || (d.first == b && d.second == a)) return true;
@@ -54,9 +74,20 @@ std::string validateSceneParams(const SceneParams& p) {
   if (!finite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be in [0, 1]";
   if (!finite(p.softness) || p.softness < 0.0) return "softness must be >= 0 (m/N)";
   if (!finite(p.mu) || p.mu < 0.0) return "mu must be >= 0";
-  for (const PairFriction& f : p.friction_pairs)
+  for (const PairFriction& f : p.friction_pairs) {
     if (!finite(f.mu) || f.mu < 0.0)
       return "friction_pairs: mu of [" + f.body_a + ", " + f.body_b + "] must be >= 0";
+    if (!finite(f.torsional) || !finite(f.rolling))
+      return "friction_pairs: torsional and rolling of [" + f.body_a + ", " + f.body_b + "] must be finite";
+  }
+  if (!finite(p.torsional_friction) || p.torsional_friction < 0.0) return "torsional_friction must be >= 0 (m)";
+  if (!finite(p.rolling_friction) || p.rolling_friction < 0.0) return "rolling_friction must be >= 0 (m)";
+  if (!finite(p.restitution) || p.restitution < 0.0 || p.restitution > 1.0) return "restitution must be in [0, 1]";
+  if (!finite(p.restitution_threshold) || p.restitution_threshold < 0.0)
+    return "restitution_threshold must be >= 0 (m/s)";
+  for (const PairRestitution& r : p.restitution_pairs)
+    if (!finite(r.restitution) || r.restitution < 0.0 || r.restitution > 1.0)
+      return "restitution_pairs: restitution of [" + r.body_a + ", " + r.body_b + "] must be in [0, 1]";
   if (!finite(p.contact_margin) || p.contact_margin < 0.0) return "contact_margin must be >= 0 (m)";
   if (!finite(p.id_match_tolerance) || p.id_match_tolerance < 0.0) return "id_match_tolerance must be >= 0 (m)";
   if (p.ground_plane.enabled) {
@@ -139,6 +170,7 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
   r.map(root, "");
   r.onlyKeys(root, "",
              {"description", "dt", "gravity", "erp", "softness", "mu", "friction_pairs", "disable_collisions",
+              "torsional_friction", "rolling_friction", "restitution", "restitution_threshold", "restitution_pairs",
               "contact_margin", "id_match_tolerance", "compliance", "gyroscopic", "ground_plane",
               "joint_origins", "initial_velocities", "solver", "duration"});
   for (const auto& kv : root) {
@@ -154,6 +186,21 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       p.erp = r.number(v, key);
     } else if (key == "softness") {
       p.softness = r.number(v, key);
+    } else if (key == "torsional_friction") {
+      p.torsional_friction = r.number(v, key);
+    } else if (key == "rolling_friction") {
+      p.rolling_friction = r.number(v, key);
+    } else if (key == "restitution") {
+      p.restitution = r.number(v, key);
+    } else if (key == "restitution_threshold") {
+      p.restitution_threshold = r.number(v, key);
+    } else if (key == "restitution_pairs") {
+      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b, restitution]");
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        const std::string k = key + "[" + std::to_string(i) + "]";
+        if (!v[i].IsSequence() || v[i].size() != 3) r.fail(k, "expected [body_a, body_b, restitution]");
+        p.restitution_pairs.push_back({r.string(v[i][0], k), r.string(v[i][1], k), r.number(v[i][2], k)});
+      }
     } else if (key == "mu") {
       p.mu = r.number(v, key);
     } else if (key == "contact_margin") {
@@ -166,13 +213,20 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       p.gyroscopic = r.boolean(v, key);
     } else if (key == "compliance") {
       if (!parseComplianceStorage(r.string(v, key), &p.compliance))
-        r.fail(key, "expected dense or block_sparse, got '" + v.Scalar() + "'");
+        r.fail(key, "expected dense, block_sparse or bodies, got '" + v.Scalar() + "'");
     } else if (key == "friction_pairs") {
-      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b, mu]");
+      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b, mu(, torsional, rolling)]");
       for (std::size_t i = 0; i < v.size(); ++i) {
         const std::string k = key + "[" + std::to_string(i) + "]";
-        if (!v[i].IsSequence() || v[i].size() != 3) r.fail(k, "expected [body_a, body_b, mu]");
-        p.friction_pairs.push_back({r.string(v[i][0], k), r.string(v[i][1], k), r.number(v[i][2], k)});
+        if (!v[i].IsSequence() || (v[i].size() != 3 && v[i].size() != 5))
+          r.fail(k, "expected [body_a, body_b, mu] or [body_a, body_b, mu, torsional, rolling]");
+        PairFriction f{r.string(v[i][0], k), r.string(v[i][1], k), r.number(v[i][2], k)};
+        if (v[i].size() == 5) {
+          f.torsional = r.number(v[i][3], k);
+          f.rolling = r.number(v[i][4], k);
+          if (f.torsional < 0.0 || f.rolling < 0.0) r.fail(k, "torsional and rolling must be >= 0 (m)");
+        }
+        p.friction_pairs.push_back(f);
       }
     } else if (key == "disable_collisions") {
       if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b]");
@@ -220,13 +274,14 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       }
     } else if (key == "solver") {
       r.map(v, key);
-      r.onlyKeys(v, key, {"name", "tolerance", "maxIt", "regularizationTerm"});
+      r.onlyKeys(v, key, {"name", "tolerance", "maxIt", "regularizationTerm", "build_lcp"});
       if (v["name"] && !parseSolverName(r.string(v["name"], "solver.name"), &p.solver.solver))
         r.fail("solver.name", "unknown solver '" + v["name"].Scalar() + "'");
       if (v["tolerance"]) p.solver.tolerance = r.number(v["tolerance"], "solver.tolerance");
       if (v["maxIt"]) p.solver.maxIt = r.integer(v["maxIt"], "solver.maxIt");
       if (v["regularizationTerm"])
         p.solver.regularizationTerm = r.number(v["regularizationTerm"], "solver.regularizationTerm");
+      if (v["build_lcp"]) p.solver.build_lcp = r.boolean(v["build_lcp"], "solver.build_lcp");
     }
   }
   if (std::string err = validateSceneParams(p); !err.empty()) throw SceneError(source + ": " + err);

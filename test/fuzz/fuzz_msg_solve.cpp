@@ -127,7 +127,7 @@ Compliance readCompliance(FuzzInput& in, const Shape& shape, const ContactArray&
     sizes.push_back(std::max(0, std::min(8, rowsOf(c))));
     total += sizes.back();
   }
-  msg.storage = static_cast<std::uint8_t>(in.below(3));  // 2 is unknown
+  msg.storage = static_cast<std::uint8_t>(in.below(3));  // 2: the body form, here without bodies (refused)
   msg.rows = shape.sized_w ? static_cast<std::uint32_t>(total) : static_cast<std::uint32_t>(in.below(40));
   const int n = static_cast<int>(std::min<std::uint32_t>(msg.rows, 48));
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, n);

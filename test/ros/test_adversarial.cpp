@@ -129,6 +129,16 @@ std::vector<Fault> faults() {
       {"NaN mu", [](Scene* s) { s->contacts.contacts[1].mu = kNaN; }, "non-finite mu"},
       {"Inf mu", [](Scene* s) { s->contacts.contacts[1].mu = kInf; }, "non-finite mu"},
       {"negative mu", [](Scene* s) { s->contacts.contacts[0].mu = -0.5; }, "negative mu"},
+      {"negative mu_torsional", [](Scene* s) { s->contacts.contacts[0].mu_torsional = -0.1; },
+       "negative or non-finite mu_torsional"},
+      {"NaN mu_rolling", [](Scene* s) { s->contacts.contacts[1].mu_rolling = kNaN; },
+       "negative or non-finite mu_rolling"},
+      {"torsional with 3 values", [](Scene* s) { s->contacts.contacts[0].type = lcs::ContactPoint::TORSIONAL; },
+       "3 d_free values for 4 rows"},
+      {"rolling rows 4", [](Scene* s) {
+         s->contacts.contacts[0].type = lcs::ContactPoint::ROLLING;
+         s->contacts.contacts[0].rows = 4;
+       }, "rows=4 but its type has 6"},
       {"NaN gap", [](Scene* s) { s->contacts.contacts[0].gap = kNaN; }, "non-finite gap"},
       {"Inf gap", [](Scene* s) { s->contacts.contacts[2].gap = -kInf; }, "non-finite gap"},
       {"erp above 1", [](Scene* s) { s->contacts.contacts[1].erp = 1.5; }, "outside [0, 1]"},

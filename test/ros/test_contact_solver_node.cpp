@@ -1,6 +1,7 @@
 // Runs against a live contact_solver (node, or with --nodelet a nodelet loaded in this
 // process): publishes known problems and checks what comes back against a direct core
 // solve of the same problem.
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/ros/markers.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
@@ -284,6 +285,70 @@ TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact)
   ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
   EXPECT_FALSE(srv.response.success);
   EXPECT_NE(srv.response.message.find("time_step"), std::string::npos) << srv.response.message;
+}
+
+// The body form of the compliance (STORAGE_BODIES): build_lcp=false runs the unbuilt
+// Gauss-Seidel and gives the forces of the built solve on the assembled W; build_lcp=true
+// (the node's default) assembles W; the topics take the body form too.
+TEST_F(ContactSolverNodeTest, BodyFormSolvesUnbuiltWithBuildLcpFalse) {
+  const Scene scene = lcp_contact_solver_test::makeBodyFormScene(freshIds(), freshStamp());
+  lcs::Problem problem;
+  std::vector<lcp_contact_solver_ros::ContactFrame> frames;
+  ASSERT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &problem, &frames), "");
+  ASSERT_TRUE(problem.bodies);
+  lcs::Problem assembled = problem;  // the built problem: the same W, assembled and dense
+  assembled.bodies.reset();
+  assembled.W = problem.bodies->toDense();
+  lcs::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
+  params.tolerance = 1e-10;
+  const lcs::SolveResult built = lcs::solveProblem(assembled, params);
+  ASSERT_TRUE(built.converged) << built.message;
+
+  lcs::SolveContacts srv;
+  srv.request.contacts = scene.contacts;
+  srv.request.compliance = scene.compliance;
+  srv.request.param_overrides = {"build_lcp=false", "tolerance=1e-10"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_TRUE(srv.response.stats.converged);
+  EXPECT_NE(srv.response.message.find("unbuilt solve on the body form (3 bodies)"), std::string::npos)
+      << srv.response.message;
+  ASSERT_EQ(srv.response.forces.forces.size(), problem.contacts.size());
+  const std::vector<int> offsets = problem.rowOffsets();
+  const double scale = built.forces.cwiseAbs().maxCoeff();
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    EXPECT_EQ(srv.response.forces.forces[i].state, static_cast<std::uint8_t>(built.states[i])) << i;
+    for (int k = 0; k < problem.contacts[i].rows; ++k)
+      EXPECT_NEAR(srv.response.forces.forces[i].lambda[k], built.forces[offsets[i] + k], 1e-8 * scale) << i << ", " << k;
+  }
+
+  // build_lcp=true: W assembled once, the same forces, no unbuilt note.
+  srv.request.param_overrides = {"build_lcp=true", "tolerance=1e-10"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_EQ(srv.response.message.find("unbuilt"), std::string::npos) << srv.response.message;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i)
+    for (int k = 0; k < problem.contacts[i].rows; ++k)
+      EXPECT_NEAR(srv.response.forces.forces[i].lambda[k], built.forces[offsets[i] + k], 1e-8 * scale);
+
+  // Other solvers assemble W and say so.
+  srv.request.param_overrides = {"build_lcp=false", "solver=newton", "tolerance=1e-10"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_NE(srv.response.message.find("newton needs the assembled W"), std::string::npos) << srv.response.message;
+
+  // A malformed body form is refused with its sentence.
+  srv.request.compliance.contact_bodies[4] = 7;
+  srv.request.param_overrides = {"build_lcp=false"};
+  ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("names body_a 7"), std::string::npos) << srv.response.message;
+
+  // The topics: paired and solved like any compliance (the node's build_lcp: assembled).
+  const lcs::SolverStats* stats = solve(scene);
+  ASSERT_NE(stats, nullptr);
+  EXPECT_TRUE(stats->success) << stats->message;
+  EXPECT_EQ(stats->num_rows, 9);
 }
 
 TEST_F(ContactSolverNodeTest, WarmStartLowersIterations) {

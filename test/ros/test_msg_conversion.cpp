@@ -1,5 +1,6 @@
 // Unit tests of the ROS layer that need no master: message conversions, parameters,
 // markers, pairing and the debug summary.
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/ros/cycle_log.h"
@@ -197,6 +198,125 @@ TEST(ToComplianceMsg, RoundTripsBlockSparse) {
   EXPECT_EQ(lcs::toDense(c.problem.W), lcs::toDense(sparse.problem.W));
 }
 
+// ---- the body form (STORAGE_BODIES, build_lcp = false) ----------------------------------
+
+// W = Σ J C Jᵀ of the body-form scene, formed the long way from the message.
+Eigen::MatrixXd bodyFormW(const lcs::Compliance& msg) {
+  const int nb = static_cast<int>(msg.body_compliance.size() / 36);
+  const int rows[] = {3, 3, 1, 2}, offsets[] = {0, 3, 6, 7, 9};
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(9, 6 * nb), C = Eigen::MatrixXd::Zero(6 * nb, 6 * nb);
+  for (int b = 0; b < nb; ++b)
+    for (int k = 0; k < 36; ++k) C(6 * b + k / 6, 6 * b + k % 6) = msg.body_compliance[36 * b + k];
+  std::size_t next = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int side = 0; side < 2; ++side) {
+      const int b = msg.contact_bodies[2 * i + side];
+      if (b < 0) continue;
+      for (int k = 0; k < 6 * rows[i]; ++k) J(offsets[i] + k / 6, 6 * b + k % 6) += msg.jacobian[next++];
+    }
+  return J * C * J.transpose();
+}
+
+TEST(ToProblem, BodyFormGivesTheBodiesAndNoW) {
+  const Scene scene = lcp_contact_solver_test::makeBodyFormScene(10, kStamp);
+  const Converted c = convert(scene);
+  ASSERT_EQ(c.error, "");
+  ASSERT_TRUE(c.problem.bodies);
+  EXPECT_EQ(lcs::complianceRows(c.problem.W), 0);
+  EXPECT_EQ(c.problem.bodies->bodyCount(), 3);
+  EXPECT_EQ(c.problem.bodies->contacts[2].body_a, 1);
+  EXPECT_EQ(c.problem.bodies->contacts[2].body_b, 0);
+  EXPECT_EQ(c.problem.bodies->contacts[0].body_b, -1);
+  const Eigen::MatrixXd W = bodyFormW(scene.compliance);
+  EXPECT_LT((c.problem.bodies->toDense() - W).cwiseAbs().maxCoeff(), 1e-14 * W.cwiseAbs().maxCoeff());
+  // Round trip: the same message back, field by field.
+  const lcs::Compliance back = toComplianceMsg(c.problem);
+  EXPECT_EQ(back.storage, lcs::Compliance::STORAGE_BODIES);
+  EXPECT_EQ(back.rows, 9u);
+  EXPECT_EQ(back.body_compliance, scene.compliance.body_compliance);
+  EXPECT_EQ(back.contact_bodies, scene.compliance.contact_bodies);
+  EXPECT_EQ(back.jacobian, scene.compliance.jacobian);
+  EXPECT_TRUE(back.body_diagonal.empty());
+  EXPECT_TRUE(back.data.empty());
+  // With an extra diagonal too.
+  Scene with_diagonal = scene;
+  with_diagonal.compliance.body_diagonal.assign(9, 0.25);
+  const Converted d = convert(with_diagonal);
+  ASSERT_EQ(d.error, "");
+  EXPECT_NEAR(d.problem.bodies->toDense()(6, 6), W(6, 6) + 0.25, 1e-12);
+  EXPECT_EQ(toComplianceMsg(d.problem).body_diagonal, with_diagonal.compliance.body_diagonal);
+}
+
+TEST(ToProblem, BodyFormSolvesUnbuiltToTheBuiltForces) {
+  const Scene scene = lcp_contact_solver_test::makeBodyFormScene(10, kStamp);
+  const Converted bodies = convert(scene);
+  ASSERT_EQ(bodies.error, "");
+  Scene dense = scene;
+  dense.compliance = toComplianceMsg(bodyFormW(scene.compliance));
+  const Converted built = convert(dense);
+  ASSERT_EQ(built.error, "");
+  lcs::SolverParams params = defaultSolverParams();
+  params.tolerance = 1e-10;
+  params.build_lcp = false;
+  const lcs::SolveResult u = lcs::solveProblem(bodies.problem, params);
+  params.build_lcp = true;
+  const lcs::SolveResult b = lcs::solveProblem(built.problem, params);
+  ASSERT_TRUE(u.converged) << u.message;
+  ASSERT_TRUE(b.converged) << b.message;
+  EXPECT_TRUE(u.unbuilt);
+  EXPECT_LT((u.forces - b.forces).cwiseAbs().maxCoeff(), 1e-8 * b.forces.cwiseAbs().maxCoeff());
+  // The debug line and the heat map read the body form.
+  const std::vector<double> mu = lcs::effectiveMu(bodies.problem, params.mu);
+  EXPECT_NE(cycleSummary(bodies.problem, u, mu).find("4 contacts, 9 rows (bodies, no W)"), std::string::npos);
+  DisplayOptions options;
+  options.showCellWidth = 0.1;
+  options.heatmap_max_rows = 5;  // cuts contact 1's block
+  const auto from_bodies = buildMarkers(scene.contacts.header, bodies.frames, bodies.problem, u, mu, options);
+  const auto from_w = buildMarkers(dense.contacts.header, built.frames, built.problem, u, mu, options);
+  const visualization_msgs::Marker* a = nullptr;
+  const visualization_msgs::Marker* w = nullptr;
+  for (const auto& m : from_bodies.markers)
+    if (m.ns == kNsComplianceHeatmap) a = &m;
+  for (const auto& m : from_w.markers)
+    if (m.ns == kNsComplianceHeatmap) w = &m;
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(w, nullptr);
+  ASSERT_EQ(a->colors.size(), 25u);
+  for (std::size_t k = 0; k < a->colors.size(); ++k) {
+    EXPECT_NEAR(a->colors[k].r, w->colors[k].r, 1e-6) << k;
+    EXPECT_NEAR(a->colors[k].g, w->colors[k].g, 1e-6) << k;
+    EXPECT_NEAR(a->colors[k].b, w->colors[k].b, 1e-6) << k;
+  }
+}
+
+TEST(ToProblem, MalformedBodyFormsAreRefusedBeforeAllocating) {
+  struct Case {
+    const char* what;
+    std::function<void(lcs::Compliance*)> spoil;
+    const char* expected;
+  };
+  const std::vector<Case> cases = {
+      {"compliance_size", [](lcs::Compliance* c) { c->body_compliance.pop_back(); }, "107 body_compliance values, not 36"},
+      {"contact_bodies", [](lcs::Compliance* c) { c->contact_bodies.push_back(0); }, "9 contact_bodies, 8 expected"},
+      {"body_range", [](lcs::Compliance* c) { c->contact_bodies[4] = 3; }, "contact 2 names body_a 3, outside -1..2"},
+      {"body_negative", [](lcs::Compliance* c) { c->contact_bodies[7] = -2; }, "contact 3 names body_b -2"},
+      {"huge_body_index", [](lcs::Compliance* c) { c->contact_bodies[0] = 2147483647; }, "outside -1..2"},
+      {"jacobian_size", [](lcs::Compliance* c) { c->jacobian.pop_back(); }, "71 jacobian values, its contacts need 72"},
+      {"static_side_counts", [](lcs::Compliance* c) { c->contact_bodies[1] = 1; }, "its contacts need 90"},
+      {"diagonal_size", [](lcs::Compliance* c) { c->body_diagonal.assign(8, 0.0); }, "8 body_diagonal values, 9 rows"},
+      {"nan_jacobian", [](lcs::Compliance* c) { c->jacobian[20] = kNaN; }, "non-finite Jacobian"},
+      {"inf_compliance", [](lcs::Compliance* c) { c->body_compliance[40] = kInf; }, "body 1 has a non-finite compliance"},
+      {"nan_diagonal", [](lcs::Compliance* c) { c->body_diagonal.assign(9, 0.0); c->body_diagonal[3] = kNaN; }, "diagonal holds a non-finite"},
+      {"rows", [](lcs::Compliance* c) { c->rows = 10; }, "rows=10, the contacts have 9"},
+  };
+  for (const Case& bad : cases) {
+    Scene scene = lcp_contact_solver_test::makeBodyFormScene(10, kStamp);
+    bad.spoil(&scene.compliance);
+    const Converted c = convert(scene);
+    EXPECT_NE(c.error.find(bad.expected), std::string::npos) << bad.what << ": '" << c.error << "'";
+  }
+}
+
 // ---- forces and stats -----------------------------------------------------------------
 
 TEST(ToConstraintForcesMsg, ForcesFollowTheContactFrames) {
@@ -239,6 +359,43 @@ TEST(SumBodyPairWrenches, SumsForceAndTorquePerPair) {
   const Eigen::Vector3d torque =
       toEigen(msg.forces[0].position).cross(f0) + toEigen(msg.forces[1].position).cross(f1);
   EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.torque) - torque).norm(), 0.0, 1e-15);
+}
+
+// A rolling contact (6 rows): its spin and rolling rows come back as a torque on body_a,
+// which the pair's wrench adds to p × f.
+TEST(ToConstraintForcesMsg, TorsionalAndRollingRowsAreATorque) {
+  Scene scene;
+  scene.contacts.header.stamp = kStamp;
+  lcs::ContactPoint c = lcp_contact_solver_test::contact(
+      5, "ball", "ground", lcs::ContactPoint::ROLLING, {-1.0, 0.0, 0.0, -0.05, 0.3, 0.4}, 0.5);
+  c.position = lcp_contact_solver_test::point(1.0, 2.0, 0.0);
+  c.normal = lcp_contact_solver_test::vec(0, 0, 1);
+  c.mu_torsional = 0.02;
+  c.mu_rolling = 0.01;
+  scene.contacts.contacts.push_back(c);
+  scene.compliance.header = scene.contacts.header;
+  scene.compliance.storage = lcs::Compliance::STORAGE_DENSE;
+  scene.compliance.rows = 6;
+  const Eigen::MatrixXd W = Eigen::MatrixXd::Identity(6, 6);
+  scene.compliance.data.assign(W.data(), W.data() + 36);
+  const Converted conv = convert(scene);
+  ASSERT_EQ(conv.error, "");
+  ASSERT_EQ(conv.problem.contacts[0].type, lcs::ContactType::kRolling);
+  EXPECT_EQ(conv.problem.contacts[0].mu_rolling, 0.01);
+  lcs::SolverParams params = defaultSolverParams();
+  params.tolerance = 1e-12;
+  const lcs::SolveResult result = lcs::solveProblem(conv.problem, params);
+  ASSERT_TRUE(result.converged) << result.message;
+  const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, conv.frames, conv.problem, result);
+  const ContactFrame& frame = conv.frames[0];
+  const Eigen::Vector3d torque =
+      frame.normal * result.forces[3] + frame.tangent1 * result.forces[4] + frame.tangent2 * result.forces[5];
+  EXPECT_GT(torque.norm(), 0.0);
+  EXPECT_NEAR((toEigen(msg.forces[0].torque) - torque).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(result.forces[3], 0.02, 1e-10);  // spin: 0.05 would stick, bound 0.02 · λ_n = 0.02
+  ASSERT_EQ(msg.wrenches.size(), 1u);
+  const Eigen::Vector3d expected = toEigen(msg.forces[0].position).cross(toEigen(msg.forces[0].force)) + torque;
+  EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.torque) - expected).norm(), 0.0, 1e-15);
 }
 
 TEST(StatsMsg, CarriesTheResult) {

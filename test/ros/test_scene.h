@@ -105,4 +105,33 @@ inline Scene makeScene(std::int64_t first_id, const ros::Time& stamp, bool block
   return s;
 }
 
+// The same contacts with the compliance in body form (STORAGE_BODIES): three bodies (box 0,
+// ball 1, arm 2; the ground is static), C_b = B_b B_bᵀ + I/2, fixed Jacobian rows on each
+// side. W = Σ J C Jᵀ is symmetric positive definite (9 rows, 18 body coordinates).
+inline Scene makeBodyFormScene(std::int64_t first_id, const ros::Time& stamp) {
+  Scene s = makeScene(first_id, stamp);
+  Compliance& c = s.compliance;
+  c = Compliance();
+  c.header = s.contacts.header;
+  c.storage = Compliance::STORAGE_BODIES;
+  c.rows = 9;
+  for (int b = 0; b < 3; ++b) {
+    Eigen::Matrix<double, 6, 6> B;
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) B(i, j) = 0.4 * std::sin(2.0 + 7.0 * b + 6 * i + j);
+    const Eigen::Matrix<double, 6, 6> C = B * B.transpose() + 0.5 * Eigen::Matrix<double, 6, 6>::Identity();
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) c.body_compliance.push_back(C(i, j));
+  }
+  c.contact_bodies = {0, -1, 0, -1, 1, 0, 2, 0};
+  const int rows[] = {3, 3, 1, 2};
+  int value = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int side = 0; side < 2; ++side) {
+      if (c.contact_bodies[2 * i + side] < 0) continue;
+      for (int k = 0; k < 6 * rows[i]; ++k) c.jacobian.push_back(std::cos(0.7 * value++) * (side == 0 ? 1.0 : -0.8));
+    }
+  return s;
+}
+
 }  // namespace lcp_contact_solver_test

@@ -84,6 +84,38 @@ void expectRoundTrip(const std::string& name) {
   sim->applyForces(lambda);
 }
 
+// `compliance: bodies`: the step's body form goes out as STORAGE_BODIES, comes back equal,
+// and the node's unbuilt solve of it is the in-process one.
+TEST(SceneMsgConversion, BodyFormRoundTripsAndSolvesUnbuilt) {
+  scene::Scene s = scene::loadNamedScene(LCS_SCENES_DIR, "box_stack");
+  s.params.compliance = scene::ComplianceStorage::kBodies;
+  s.params.solver.build_lcp = false;
+  scene::SceneSimulator sim(s);
+  for (int k = 0; k < 5; ++k) sim.step();
+  const scene::StepProblem& sp = sim.buildStep();
+  ASSERT_FALSE(sp.problem.contacts.empty());
+  ASSERT_TRUE(sp.problem.bodies);
+  const lcs::ContactArray contacts = ros_layer::toContactArrayMsg(sp, header(0.05));
+  const lcs::Compliance compliance = ros_layer::toComplianceMsg(sp, header(0.05));
+  EXPECT_EQ(compliance.storage, lcs::Compliance::STORAGE_BODIES);
+  EXPECT_EQ(compliance.header.stamp, contacts.header.stamp);
+  EXPECT_TRUE(compliance.data.empty());
+  EXPECT_TRUE(compliance.block_data.empty());
+  lcs::Problem back;
+  std::vector<ros_layer::ContactFrame> frames;
+  ASSERT_EQ(ros_layer::toProblem(contacts, compliance, 0, &back, &frames), "");
+  ASSERT_TRUE(back.bodies);
+  EXPECT_EQ(back.bodies->toDense(), sp.problem.bodies->toDense());
+  EXPECT_EQ(back.d_free, sp.problem.d_free);
+  lcs::ContactSolver direct(sim.params().solver), through(sim.params().solver);
+  const lcs::SolveResult a = direct.solve(sp.problem);
+  const lcs::SolveResult b = through.solve(back);
+  EXPECT_TRUE(a.unbuilt);
+  EXPECT_TRUE(b.unbuilt);
+  EXPECT_EQ(a.forces, b.forces) << "the same body form, bit for bit";
+  sim.applyForces(a.forces);
+}
+
 TEST(SceneMsgConversion, RoundTripBoxStack) { expectRoundTrip("box_stack"); }
 TEST(SceneMsgConversion, RoundTripMixedFrictionlessPairs) { expectRoundTrip("mixed"); }
 TEST(SceneMsgConversion, RoundTripSpherePile) { expectRoundTrip("sphere_pile"); }

@@ -16,6 +16,8 @@ namespace lcp_contact_solver {
 
 // Everything a kernel needs, computed once per solve.
 struct SolveContext {
+  // With Problem::bodies (the unbuilt solve) only the Gauss-Seidel kernels run; ContactSolver
+  // hands every other kernel a problem with the assembled W.
   const Problem* problem = nullptr;
   const SolverParams* params = nullptr;
   std::vector<int> offsets;   // first row of each contact, size nc + 1

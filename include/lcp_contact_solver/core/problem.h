@@ -4,6 +4,11 @@
 //   unilateral row (contact normal):  0 ≤ λ_n ⟂ d_n ≥ 0
 //   friction rows (two tangents):     |λ_t| ≤ μ λ_n, and when sliding λ_t = -μ λ_n d_t/|d_t|
 //   bilateral rows:                   λ free, d = 0
+//   torsional row (spin about n):     |λ_s| ≤ μ_tor λ_n, opposing the relative spin
+//   rolling rows (about t1, t2):      |λ_r| ≤ μ_roll λ_n, opposing the relative rolling
+// (the friction cone of a 4- or 6-row contact is the product of these with Coulomb's: each
+// law is bounded by the same λ_n; μ_tor and μ_roll are lengths, λ_s and λ_r torques; MuJoCo's
+// condim 4 and 6, with its elliptic cone replaced by this decoupled one)
 //
 // W is the compliance in constraint space (for rigid bodies J M⁻¹ Jᵀ), given dense or
 // block-sparse with one block per contact pair. Rows are laid out contact after contact,
@@ -14,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <variant>
 #include <vector>
@@ -24,7 +30,14 @@ enum class ContactType : std::uint8_t {
   kFrictional = 0,    // 3 rows: normal, tangent 1, tangent 2 (Coulomb disc)
   kFrictionless = 1,  // 1 row: normal only
   kBilateral = 2,     // `rows` equality rows with free-sign force
+  kTorsional = 3,     // 4 rows: normal, tangent 1, tangent 2, spin about the normal
+  kRolling = 4,       // 6 rows: the 4 torsional ones, then rolling about tangent 1 and 2
 };
+
+// Frictional, torsional or rolling: the types with the sliding (Coulomb disc) rows.
+inline bool hasSlidingFriction(ContactType type) {
+  return type == ContactType::kFrictional || type == ContactType::kTorsional || type == ContactType::kRolling;
+}
 
 // Rows a contact of this type occupies. Bilateral contacts carry their own count.
 int rowsForType(ContactType type);
@@ -32,11 +45,15 @@ int rowsForType(ContactType type);
 struct Contact {
   std::int64_t id = 0;  // persistent across cycles; keys the warm start
   ContactType type = ContactType::kFrictional;
-  int rows = 3;         // 3 frictional, 1 frictionless, >= 1 bilateral
+  int rows = 3;         // 3 frictional, 1 frictionless, 4 torsional, 6 rolling, >= 1 bilateral
   // Friction coefficient (dimensionless). kMuDefault (-1) means "not given": the solver's
   // `mu` parameter is used; any other negative value is invalid input. Only meaningful for frictional contacts; μ = 0 makes a frictional
   // contact cost one row.
   double mu = -1.0;
+  // Torsional and rolling friction coefficients (m: torque per newton of normal force) of
+  // kTorsional (μ_tor) and kRolling (both) contacts; >= 0.
+  double mu_torsional = 0.0;
+  double mu_rolling = 0.0;
   // Position-error correction and softness of the normal row (stabilization.h); unused by
   // bilateral contacts. gap: signed distance at the start of the step (m; < 0 penetration),
   // 0 when unknown. erp: Baumgarte factor β in [0, 1]; softness: added to W_nn, >= 0 in the
@@ -86,9 +103,17 @@ void multiply(const ComplianceMatrix& W, const Eigen::VectorXd& x, Eigen::Vector
 // Diagonal block of contact rows [offset, offset + n).
 Eigen::MatrixXd diagonalBlock(const ComplianceMatrix& W, int offset, int n);
 
+// The body form of the compliance (per-body compliance and contact Jacobians, W not
+// assembled): body_compliance.h.
+struct BodyCompliance;
+
 struct Problem {
   std::vector<Contact> contacts;
+  // The assembled compliance. Left empty (0×0) when `bodies` is set.
   ComplianceMatrix W = Eigen::MatrixXd();
+  // The body form (SOFA's build_lcp = false), instead of W: ContactSolver runs the unbuilt
+  // Gauss-Seidel on it (SolverParams::build_lcp = false) or assembles W once.
+  std::shared_ptr<const BodyCompliance> bodies;
   Eigen::VectorXd d_free;  // free-motion violation, one entry per row
   std::string name;        // for reports (file name, topic, ...)
 

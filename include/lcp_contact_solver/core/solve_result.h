@@ -53,6 +53,9 @@ struct SolveResult {
   FrictionModel friction_model = FrictionModel::kCoulombDisc;
   double solve_time = 0.0;    // wall time of the solve, seconds
   std::string solver;         // name of the solver that ran
+  // The unbuilt Gauss-Seidel ran on the problem's body form (build_lcp = false): W was
+  // never assembled. False for every built solve.
+  bool unbuilt = false;
   std::string message;        // human-readable detail for non-converged statuses
   std::vector<double> residual_history;  // per sweep/pivot, only with displayDebug
 };

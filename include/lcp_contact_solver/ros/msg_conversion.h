@@ -46,6 +46,9 @@ std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& 
 
 // The compliance message of a core matrix (dense, or block-sparse with the core's blocks).
 lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W);
+// The compliance message of a problem: its body form (STORAGE_BODIES) when it has one,
+// otherwise its W as above. `header` is left to the caller.
+lcs::Compliance toComplianceMsg(const lcs::Problem& problem);
 
 // Forces of a solved problem: per contact and summed per body pair. `frames` and
 // `problem` come from toProblem on `contacts`.

@@ -33,7 +33,8 @@ namespace lcs = ::lcp_contact_solver;
 // name it.
 lcs::ContactArray toContactArrayMsg(const lcs::scene::StepProblem& step, const std_msgs::Header& header);
 
-// The step's compliance with `header` (toComplianceMsg of the step's W).
+// The step's compliance with `header` (toComplianceMsg of the step's problem: its W, or
+// its body form with `compliance: bodies`).
 lcs::Compliance toComplianceMsg(const lcs::scene::StepProblem& step, const std_msgs::Header& header);
 
 // λ (one value per row of `problem`, N) from a ConstraintForces message, matched by contact

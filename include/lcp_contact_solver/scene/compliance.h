@@ -15,10 +15,13 @@
 // J: one row per contact row (normal, t1, t2), two 6-dof blocks (body A, body B), each in
 // the body's [linear; angular] velocity coordinates (COM velocity, world angular velocity):
 //   J_A,u = [ uᵀ, ((p − c_A) × u)ᵀ ],   J_B,u = −[ uᵀ, ((p − c_B) × u)ᵀ ]
-// so J v is the velocity of A relative to B at the contact point along u. Static bodies
-// have no block (M⁻¹ = 0).
+// so J v is the velocity of A relative to B at the contact point along u. Torsional and
+// rolling rows are angular only: J_A,ω = [ 0, ωᵀ ], J_B,ω = −[ 0, ωᵀ ] for ω = n (spin),
+// t1, t2 (rolling): the relative angular velocity about those axes, λ a torque (N·m, the
+// row's "d" in rad). Static bodies have no block (M⁻¹ = 0).
 #pragma once
 
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/problem.h"
 #include "lcp_contact_solver/scene/contact_generator.h"
 #include "lcp_contact_solver/scene/scene.h"
@@ -53,9 +56,16 @@ class RigidContactModel {
 
   // dt² J M⁻¹ Jᵀ; block-sparse holds one block per pair of contacts sharing a dynamic body
   // (both (i, j) and (j, i)), columns ascending.
+  // kBodies gives the block-sparse W (the body form is bodyCompliance).
   ComplianceMatrix compliance(double dt, ComplianceStorage storage) const;
+  // The body form of the same W (core/body_compliance.h): C_b = dt² M_b⁻¹ for every scene
+  // body (zero for static ones, which no contact names: their side is -1) and each
+  // contact's J_A, J_B. O(bodies + rows).
+  BodyCompliance bodyCompliance(double dt) const;
   // gapTerm + dt J v_free.
   Eigen::VectorXd freeViolation(const std::vector<Vector6d>& v_free, double dt) const;
+  // Relative normal velocity J_n v of each contact (m/s; < 0 approaching).
+  Eigen::VectorXd normalVelocities(const std::vector<Vector6d>& v) const;
   // v += dt M⁻¹ Jᵀ λ for every dynamic body (λ one entry per row).
   void applyForces(const Eigen::VectorXd& lambda, double dt, std::vector<Vector6d>* velocities) const;
   // Jᵀ λ per body: the contact wrench [force; torque about the COM] on each body (world).
@@ -68,8 +78,8 @@ class RigidContactModel {
  private:
   struct Side {
     int body = -1;                        // -1: static (no block)
-    Eigen::Matrix<double, 3, 6> J;        // first `rows` rows used
-    Eigen::Matrix<double, 6, 3> MinvJt;   // M⁻¹ Jᵀ
+    Eigen::Matrix<double, 6, 6> J;        // first `rows` rows used
+    Eigen::Matrix<double, 6, 6> MinvJt;   // M⁻¹ Jᵀ
   };
   struct ContactData {
     int rows = 3;
@@ -90,7 +100,8 @@ class RigidContactModel {
 // The core contacts of the frames: id, type, rows, μ, gap, and the scene's erp and softness.
 std::vector<Contact> problemContacts(const Scene& scene, const std::vector<ContactFrame>& frames);
 
-// Problem (contacts, W, d_free) of the given frames; frames.size() == contacts.
+// Problem (contacts, W, d_free) of the given frames; frames.size() == contacts. With
+// kBodies the problem carries the body form (Problem::bodies) and no W.
 Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
                      const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
 

@@ -60,6 +60,9 @@ struct ContactFrame {
   Eigen::Vector3d t2 = -Eigen::Vector3d::UnitX();
   double depth = 0.0;  // m; > 0 penetration, < 0 gap (speculative contact)
   double mu = 0.0;
+  double mu_torsional = 0.0;  // m
+  double mu_rolling = 0.0;    // m
+  double restitution = 0.0;
   ContactType type = ContactType::kFrictional;
   int rows = 3;
   Eigen::Vector3d point_local_a = Eigen::Vector3d::Zero();  // point in A's link frame

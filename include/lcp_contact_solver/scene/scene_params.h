@@ -30,15 +30,33 @@ class SceneError : public std::runtime_error {
 enum class ComplianceStorage {
   kDense,        // "dense": Eigen::MatrixXd
   kBlockSparse,  // "block_sparse": one block per pair of contacts sharing a dynamic body
+  kBodies,       // "bodies": the body form (dt² M⁻¹ per body and the contacts' Jacobians,
+                 // core/body_compliance.h), W not assembled: with build_lcp = false the
+                 // solver runs unbuilt (SOFA's build_lcp), otherwise it assembles W once
 };
 const char* complianceStorageName(ComplianceStorage storage);
 bool parseComplianceStorage(const std::string& name, ComplianceStorage* storage);
 
 // Friction between two named bodies (order does not matter). μ = 0 makes the pair's
 // contacts frictionless one-row contacts.
+// Friction of one body pair. The contact's rows follow what it asks for (MuJoCo's
+// condim): mu = 0 → 1 row; mu > 0 → 3; torsional > 0 → 4 (spin); rolling > 0 → 6.
 struct PairFriction {
   std::string body_a, body_b;
   double mu = 0.0;
+  double torsional = -1.0;  // m; < 0: the scene's torsional_friction
+  double rolling = -1.0;    // m; < 0: the scene's rolling_friction
+};
+
+// Restitution of one body pair (Newton's coefficient, [0, 1]).
+struct PairRestitution {
+  std::string body_a, body_b;
+  double restitution = 0.0;
+};
+
+// What a body pair's contacts are made of.
+struct PairContactModel {
+  double mu = 0.0, torsional = 0.0, rolling = 0.0, restitution = 0.0;
 };
 
 // Replaces the origin of a URDF joint (fixed or floating) before the scene is built;
@@ -82,6 +100,15 @@ struct SceneParams {
   // Default friction coefficient of every body pair; `friction_pairs` overrides it.
   double mu = 0.5;
   std::vector<PairFriction> friction_pairs;
+  // Torsional and rolling friction of every pair with mu > 0 (m: torque per newton of
+  // normal force); 0 = none, so contacts stay 3 rows unless a scene asks for more.
+  double torsional_friction = 0.0;
+  double rolling_friction = 0.0;
+  // Newton restitution: at impact (normal approach faster than restitution_threshold, m/s)
+  // the contact asks for a separation speed of restitution × the approach speed.
+  double restitution = 0.0;
+  double restitution_threshold = 0.1;
+  std::vector<PairRestitution> restitution_pairs;
   // Body pairs never tested (SRDF-style disable list): `disable_collisions: [[a, b], ...]`.
   std::vector<std::pair<std::string, std::string>> disable_collisions;
   // Speculative contact distance (m): shape pairs closer than this produce contacts; a
@@ -99,8 +126,9 @@ struct SceneParams {
   std::map<std::string, JointOriginOverride> joint_origins;
   std::map<std::string, InitialVelocity> initial_velocities;
   // Solver settings of the in-process simulator (SceneSimulator). YAML `solver:` map with
-  // keys `name`, `tolerance`, `maxIt`, `regularizationTerm`. The ROS simulator node leaves
-  // solving to the solver node and ignores them.
+  // keys `name`, `tolerance`, `maxIt`, `regularizationTerm`, `build_lcp` (false with
+  // `compliance: bodies`: the unbuilt solve). The ROS simulator node leaves solving to the
+  // solver node and ignores them.
   SolverParams solver = defaultSceneSolverParams();
   // Suggested simulated time for demos (s); 0 = not given.
   double duration = 0.0;
@@ -108,6 +136,7 @@ struct SceneParams {
   static SolverParams defaultSceneSolverParams();
   // Friction coefficient of the pair (overrides first, then `mu`).
   double frictionFor(const std::string& a, const std::string& b) const;
+  PairContactModel contactModelFor(const std::string& a, const std::string& b) const;
   bool collisionDisabled(const std::string& a, const std::string& b) const;
 };
 

@@ -42,6 +42,7 @@ struct StepStats {
   int contacts = 0;
   int rows = 0;
   int frictionless_contacts = 0;
+  int impacts = 0;  // contacts that bounced this step (restitution)
   ContactGenerationStats generation;
   bool solved = false;         // the in-process solver ran (false without contacts or with applyForces)
   SolveStatus status = SolveStatus::kConverged;
@@ -106,6 +107,7 @@ class SceneSimulator {
   ContactSolver& solver() { return solver_; }
 
  private:
+  void applyRestitution(double dt);
   Scene scene_;
   std::unique_ptr<ContactGenerator> generator_;
   ContactSolver solver_;

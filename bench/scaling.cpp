@@ -1,0 +1,232 @@
+// Scaling from ~10 to ~10,000 contacts (issue #8; docs/BENCHMARKS.md "Scaling"). In-process,
+// ROS-free; a benchmark, never a test.
+//
+//   scaling [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps 3]
+//           [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--array-mb 512] [--out FILE.csv]
+//
+// Problems: bench/scene_problems.h (brick pyramids, box_stack's bodies, ~4 k² contacts for k
+// bricks at the base; sphere piles, sphere_pile's balls), taken after --pyramid-steps /
+// --pile-steps in-process steps, W block-sparse as the scene builds it. Forms of the same
+// problem:
+//   dense         W converted with BlockSparseMatrix::toDense (skipped when rows² · 8 bytes
+//                 exceeds --dense-max-gb: the CSV says "skipped")
+//   block_sparse  the scene's W
+//   unbuilt       the body form (Problem::bodies, SolverParams::build_lcp = false): no W
+// Per form: bytes of the compliance, setup (local blocks etc.), time per nlgs sweep (fixed
+// sweep count, SOFA rule at an unreachable tolerance, (t(5 + S) - t(5)) / S, fastest of 3),
+// and time to a residual of 1e-4 and 1e-6 with auto (built: nlgs at 1e-4, newton ≤ 200 rows /
+// apgd above at 1e-6; unbuilt: nlgs) with a wall-clock budget (--budget s, maxIt 10^6).
+// Bandwidth: the machine's single-thread read bandwidth, measured here (sum of a --array-mb
+// array of doubles with 8 accumulators, fastest of 5 passes, before and after), and the
+// ratio dense sweep / (bytes of W / bandwidth): 1 means a sweep costs exactly one read of W.
+#include "bench8_util.h"
+#include "scene_problems.h"
+
+#include "lcp_contact_solver/core/body_compliance.h"
+#include "lcp_contact_solver/core/contact_solver.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lcs = lcp_contact_solver;
+using lcs_bench::Clock;
+using lcs_bench::secondsSince;
+
+namespace {
+
+struct Options {
+  std::vector<int> bases = {2, 5, 16, 28, 50};
+  std::vector<int> balls = {4, 40, 350, 1000, 2000};
+  int pyramid_steps = 3, pile_steps = 30;
+  double dense_max_gb = 2.0;
+  double budget = 5.0;
+  int array_mb = 512;
+  std::string out = "bench/results/scaling.csv";
+};
+
+int usage(int code) {
+  std::fprintf(code ? stderr : stdout,
+               "usage: scaling [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
+               "               [--pile-steps N] [--dense-max-gb G] [--budget S] [--array-mb MB] [--out FILE.csv]\n");
+  return code;
+}
+
+// Single-thread read bandwidth (bytes/s): sum of `mb` MB of doubles, 8 independent
+// accumulators (so the adds do not serialize), fastest of `passes`.
+double readBandwidth(int mb, int passes = 5) {
+  const std::size_t n = static_cast<std::size_t>(mb) * 1024 * 1024 / sizeof(double);
+  std::unique_ptr<double[]> a(new double[n]);
+  for (std::size_t i = 0; i < n; ++i) a[i] = 1e-9 * static_cast<double>(i % 1000);
+  double best = 1e300, sink = 0.0;
+  for (int p = 0; p < passes; ++p) {
+    const auto t0 = Clock::now();
+    double s[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (std::size_t i = 0; i + 8 <= n; i += 8)
+      for (int k = 0; k < 8; ++k) s[k] += a[i + k];
+    const double t = secondsSince(t0);
+    sink += s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7];
+    best = std::min(best, t);
+  }
+  if (sink == 42.0) std::fprintf(stderr, " ");  // keep the sums
+  return static_cast<double>(n * sizeof(double)) / best;
+}
+
+std::string num(double v, const char* fmt = "%.6g") {
+  if (!std::isfinite(v)) return "";
+  char b[64];
+  std::snprintf(b, sizeof(b), fmt, v);
+  return b;
+}
+
+std::string human(double bytes) {
+  char b[32];
+  if (bytes >= 1e9) std::snprintf(b, sizeof(b), "%.2f GB", bytes / 1e9);
+  else if (bytes >= 1e6) std::snprintf(b, sizeof(b), "%.1f MB", bytes / 1e6);
+  else std::snprintf(b, sizeof(b), "%.0f kB", bytes / 1e3);
+  return b;
+}
+
+std::string ms(double s) {
+  if (!std::isfinite(s)) return "✗";
+  char b[32];
+  if (s < 1e-3) std::snprintf(b, sizeof(b), "%.0f µs", 1e6 * s);
+  else if (s < 1.0) std::snprintf(b, sizeof(b), "%.3g ms", 1e3 * s);
+  else std::snprintf(b, sizeof(b), "%.2f s", s);
+  return b;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") return usage(0);
+    if (i + 1 >= argc) return usage(2);
+    const std::string v = argv[++i];
+    if (a == "--bases") o.bases = lcs_bench::parseIntList(v);
+    else if (a == "--balls") o.balls = lcs_bench::parseIntList(v);
+    else if (a == "--pyramid-steps") o.pyramid_steps = std::stoi(v);
+    else if (a == "--pile-steps") o.pile_steps = std::stoi(v);
+    else if (a == "--dense-max-gb") o.dense_max_gb = std::stod(v);
+    else if (a == "--budget") o.budget = std::stod(v);
+    else if (a == "--array-mb") o.array_mb = std::stoi(v);
+    else if (a == "--out") o.out = v;
+    else return usage(2);
+  }
+  std::ofstream csv(o.out);
+  if (!csv) {
+    std::fprintf(stderr, "scaling: cannot write %s\n", o.out.c_str());
+    return 1;
+  }
+  std::printf("scaling: load average %s at the start, %ld cores\n", lcs_bench::loadAverageText().c_str(),
+              sysconf(_SC_NPROCESSORS_ONLN));
+  const double bw0 = readBandwidth(o.array_mb);
+  std::printf("scaling: read bandwidth %.2f GB/s (sum of %d MB, one thread, fastest of 5)\n", bw0 / 1e9, o.array_mb);
+  std::fflush(stdout);
+
+  csv << "problem,family,bodies,contacts,rows,form,w_bytes,setup_ms,sweeps,us_per_sweep,ns_per_row_sweep,"
+         "bandwidth_gbs,read_w_us,sweep_over_read_w,t_1e-4_ms,it_1e-4,solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
+         "solver_1e-6,status_1e-6,residual_1e-6,load1\n";
+
+  std::vector<lcs_bench::SceneProblem> problems;
+  const auto t_gen = Clock::now();
+  for (int b : o.bases) {
+    auto p = lcs_bench::makeSceneProblems(LCS_SCENES_DIR, {b}, {}, o.pyramid_steps);
+    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(), p[0].problem.contacts.size(),
+                 secondsSince(t_gen));
+    problems.push_back(std::move(p[0]));
+  }
+  for (int n : o.balls) {
+    auto p = lcs_bench::makeSceneProblems(LCS_SCENES_DIR, {}, {n}, o.pile_steps);
+    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(), p[0].problem.contacts.size(),
+                 secondsSince(t_gen));
+    problems.push_back(std::move(p[0]));
+  }
+
+  std::printf("\n| problem | contacts | rows | form | W bytes | setup | µs/sweep | ns/row·sweep | sweep ÷ read(W) | "
+              "to 1e-4 (auto) | to 1e-6 (auto) |\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (lcs_bench::SceneProblem& sp : problems) {
+    const lcs::Problem& sparse = sp.problem;
+    const int nc = static_cast<int>(sparse.contacts.size()), rows = sparse.rowCount();
+    if (nc == 0) continue;
+    const std::string family = sp.name.rfind("box_pyramid", 0) == 0 ? "box_pyramid" : "sphere_pile";
+    struct Form {
+      std::string name;
+      const lcs::Problem* problem;
+      bool build_lcp;
+    };
+    lcs::Problem dense;
+    const double dense_bytes = static_cast<double>(rows) * rows * sizeof(double);
+    const bool do_dense = dense_bytes <= o.dense_max_gb * 1e9;
+    std::vector<Form> forms;
+    if (do_dense) {
+      dense = sparse;
+      dense.W = std::get<lcs::BlockSparseMatrix>(sparse.W).toDense();
+      forms.push_back({"dense", &dense, true});
+    } else {
+      csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense," << num(dense_bytes)
+          << ",,,,,,,,,,,skipped,,,,skipped,," << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
+      std::printf("| %s | %d | %d | dense | %s | skipped (W > %.1f GB) | | | | | |\n", sp.name.c_str(), nc, rows,
+                  human(dense_bytes).c_str(), o.dense_max_gb);
+    }
+    forms.push_back({"block_sparse", &sparse, true});
+    if (sp.body_form.bodies) forms.push_back({"unbuilt", &sp.body_form, false});
+
+    for (const Form& f : forms) {
+      lcs::SolverParams params;
+      params.solver = lcs::SolverKind::kNlgs;
+      params.build_lcp = f.build_lcp;
+      const int sweeps = 20;  // the early sweeps of a cold solve, where every contact still moves
+      const lcs_bench::SweepTiming st = lcs_bench::timePerSweep(*f.problem, params, sweeps);
+      if (st.result.unbuilt == f.build_lcp)
+        std::fprintf(stderr, "%s %s: the unbuilt path was %staken\n", sp.name.c_str(), f.name.c_str(),
+                     st.result.unbuilt ? "" : "not ");
+      const double bytes = static_cast<double>(lcs_bench::bytesOfCompliance(*f.problem));
+      const double read_w = bytes / bw0;
+      // To a tolerance: auto, cold, budget.
+      lcs_bench::Timed tol[2];
+      const double tols[2] = {1e-4, 1e-6};
+      for (int k = 0; k < 2; ++k) {
+        lcs::SolverParams p;
+        p.solver = lcs::SolverKind::kAuto;
+        p.build_lcp = f.build_lcp;
+        p.tolerance = tols[k];
+        p.maxIt = 1000000;
+        p.time_budget = o.budget;
+        p.initial_guess = false;
+        tol[k] = lcs_bench::timeSolve(*f.problem, p, 0.05, 3, 0.5);
+      }
+      auto t_of = [](const lcs_bench::Timed& t) { return t.result.converged ? t.best : std::nan(""); };
+      csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ',' << f.name << ','
+          << num(bytes) << ',' << num(1e3 * st.setup) << ',' << st.sweeps << ',' << num(1e6 * st.per_sweep) << ','
+          << num(1e9 * st.per_sweep / rows) << ',' << num(bw0 / 1e9) << ',' << num(1e6 * read_w) << ','
+          << num(st.per_sweep / read_w) << ',';
+      for (int k = 0; k < 2; ++k)
+        csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver << ','
+            << lcs::statusName(tol[k].result.status) << ',';
+      csv << num(tol[1].result.residual) << ',' << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
+      csv.flush();
+      auto cell = [](double v, const char* fmt) { return std::isfinite(v) ? num(v, fmt) : std::string("–"); };
+      std::printf("| %s | %d | %d | %s | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n", sp.name.c_str(),
+                  nc, rows, f.name.c_str(), human(bytes).c_str(), std::isfinite(st.setup) ? ms(st.setup).c_str() : "–",
+                  cell(1e6 * st.per_sweep, "%.1f").c_str(), cell(1e9 * st.per_sweep / rows, "%.1f").c_str(),
+                  cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(),
+                  tol[0].result.solver.c_str(), tol[0].result.iterations, ms(t_of(tol[1])).c_str(),
+                  tol[1].result.solver.c_str(), tol[1].result.iterations);
+      std::fflush(stdout);
+    }
+  }
+  const double bw1 = readBandwidth(o.array_mb);
+  std::printf("\nscaling: read bandwidth %.2f GB/s at the end; load average %s; CSV %s\n", bw1 / 1e9,
+              lcs_bench::loadAverageText().c_str(), o.out.c_str());
+  return 0;
+}
