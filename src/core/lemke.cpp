@@ -67,6 +67,9 @@ LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
           lcp.variables.push_back({first + k, -1.0});
         }
         break;
+      case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
+      case ContactType::kRolling:
+        break;
     }
   }
   const int n = static_cast<int>(lcp.variables.size());

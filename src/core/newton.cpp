@@ -126,6 +126,9 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
         nc.rho_n = inverse(D(0, 0));
         nc.rho_t = inverse(0.5 * (D(1, 1) + D(2, 2)));
         break;
+      case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
+      case ContactType::kRolling:
+        break;
     }
   }
   return contacts;

@@ -119,6 +119,9 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
       case ContactType::kBilateral:
         for (int k = 0; k < c.rows; ++k) sum += u[k] * u[k];
         break;
+      case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
+      case ContactType::kRolling:
+        break;
     }
   }
   const double q_norm = problem.d_free.norm();

@@ -301,9 +301,10 @@ TEST_F(AdversarialTest, ServiceRejectsEveryFaultAndGoesOn) {
 // Bad parameter overrides through the service: named, refused, the node unchanged.
 TEST_F(AdversarialTest, ServiceRejectsBadOverrides) {
   const Scene scene = makeScene(freshIds(), freshStamp());
-  for (const std::string& bad : {"tolerance=nan", "tolerance=-1", "maxIt=0", "mu=-2", "mu=inf", "sor=2",
-                                 "regularizationTerm=-1", "solver=simplex", "max_rows=-5", "maxIt=1e99", "nonsense",
-                                 "=1", "time_budget=nan"}) {
+  for (const char* bad : {"tolerance=nan", "tolerance=-1", "maxIt=0", "mu=-2", "mu=inf", "sor=2",
+                          "regularizationTerm=-1", "solver=simplex", "max_rows=-5", "maxIt=1e99", "nonsense",
+                          "=1", "time_budget=nan", "erp=1.5", "erp=-0.1", "softness=-1", "softness=inf",
+                          "constraint_level=acceleration", "time_step=-0.01"}) {
     lcs::SolveContacts srv;
     srv.request.contacts = scene.contacts;
     srv.request.compliance = scene.compliance;
