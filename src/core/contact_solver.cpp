@@ -181,7 +181,8 @@ Eigen::VectorXd ContactSolver::initialGuess(const Problem& problem, const std::v
   if (!params_.initial_guess) return lambda;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const auto it = warm_start_.find(problem.contacts[i].id);
-    if (it == warm_start_.end() || static_cast<int>(it->second.size()) != problem.contacts[i].rows) continue;
+    // Leading rows (normal first) also seed a contact that lost rows, e.g. μ set to 0.
+    if (it == warm_start_.end() || static_cast<int>(it->second.size()) < problem.contacts[i].rows) continue;
     for (int k = 0; k < problem.contacts[i].rows; ++k) lambda[offsets[i] + k] = it->second[k];
   }
   return lambda;
@@ -196,6 +197,62 @@ void ContactSolver::rememberForces(const Problem& problem, const std::vector<int
     warm_start_[problem.contacts[i].id].assign(lambda.data() + offsets[i], lambda.data() + offsets[i] + rows);
   }
 }
+
+namespace {
+
+// A frictional contact whose μ is 0 has two tangent rows that can never carry force.
+bool zeroFriction(const Contact& c, double default_mu) {
+  return c.type == ContactType::kFrictional && (c.mu == 0.0 || (c.mu == Contact::kMuDefault && default_mu == 0.0));
+}
+
+// The problem without those rows: each such contact becomes a 1-row frictionless one, W and
+// d_free keep its normal row only. `kept` maps each reduced row to its row in `p`.
+struct Compaction {
+  Problem reduced;
+  std::vector<int> kept;
+};
+
+Compaction compactZeroFriction(const Problem& p, double default_mu) {
+  Compaction out;
+  out.reduced.name = p.name;
+  out.reduced.contacts = p.contacts;
+  const std::vector<int> offsets = p.rowOffsets();
+  std::vector<std::vector<int>> local(p.contacts.size());  // kept rows of each contact, local index
+  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+    Contact& c = out.reduced.contacts[i];
+    if (zeroFriction(c, default_mu)) {
+      c.type = ContactType::kFrictionless;
+      c.rows = 1;
+    }
+    for (int k = 0; k < c.rows; ++k) {
+      local[i].push_back(k);
+      out.kept.push_back(offsets[i] + k);
+    }
+  }
+  out.reduced.d_free = p.d_free(out.kept);
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {
+    out.reduced.W = Eigen::MatrixXd((*dense)(out.kept, out.kept));
+    return out;
+  }
+  const auto& W = std::get<BlockSparseMatrix>(p.W);
+  std::vector<int> sizes;
+  for (const Contact& c : out.reduced.contacts) sizes.push_back(c.rows);
+  BlockSparseMatrix R = BlockSparseMatrix::withBlockSizes(sizes);
+  for (int i = 0; i < W.blockCount(); ++i) {
+    R.beginRow();
+    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+      const int j = W.block_col[b];
+      const int cols = p.contacts[j].rows;
+      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> block(
+          W.values.data() + W.value_start[b], p.contacts[i].rows, cols);
+      R.addBlock(j, Eigen::MatrixXd(block(local[i], local[j])));
+    }
+  }
+  out.reduced.W = std::move(R);
+  return out;
+}
+
+}  // namespace
 
 SolveResult ContactSolver::solve(const Problem& input) {
   const Clock::time_point start = Clock::now();
@@ -221,7 +278,15 @@ SolveResult ContactSolver::solve(const Problem& input) {
   const bool unbuilt = stated.bodies && !params_.build_lcp && runsUnbuilt(params_.solver);
   Problem assembled;
   if (stated.bodies && !unbuilt) assembled = assembledProblem(stated);
-  const Problem& problem = stated.bodies && !unbuilt ? assembled : stated;
+  const Problem& base = stated.bodies && !unbuilt ? assembled : stated;
+  // μ = 0 contacts cost one row (README "Contact models"): the kernels run without their
+  // tangent rows; forces, d, residual and states are reported on every row of `base`.
+  const bool compact = !unbuilt && std::any_of(base.contacts.begin(), base.contacts.end(), [this](const Contact& c) {
+    return zeroFriction(c, params_.mu);
+  });
+  Compaction compaction;
+  if (compact) compaction = compactZeroFriction(base, params_.mu);
+  const Problem& problem = compact ? compaction.reduced : base;
 
   SolveContext ctx;
   ctx.problem = &problem;
@@ -242,9 +307,9 @@ SolveResult ContactSolver::solve(const Problem& input) {
     result.status = SolveStatus::kNotApplicable;
     result.message = std::string(solverName(kind)) +
                      " does not solve torsional or rolling friction (4- and 6-row contacts); use nlgs or auto";
-    result.forces = Eigen::VectorXd::Zero(problem.rowCount());
-    result.d = problem.d_free;
-    result.states.assign(problem.contacts.size(), ContactState::kOpen);
+    result.forces = Eigen::VectorXd::Zero(base.rowCount());
+    result.d = base.d_free;
+    result.states.assign(base.contacts.size(), ContactState::kOpen);
     result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
     return result;
   }
@@ -281,8 +346,25 @@ SolveResult ContactSolver::solve(const Problem& input) {
     report.status = SolveStatus::kNumericalFailure;
     report.message = "W λ overflowed; forces reset to zero";
   }
-  result.residual = naturalMapResidual(problem, ctx.mu, result.forces, result.d, ctx.ignored);
-  result.states = classifyContacts(problem, ctx.mu, result.forces, ctx.ignored);
+  if (compact) {  // back to every row: the dropped tangent rows carry no force
+    Eigen::VectorXd forces = Eigen::VectorXd::Zero(base.rowCount());
+    forces(compaction.kept) = result.forces;
+    Eigen::VectorXd d;
+    multiply(base.W, forces, d);
+    d += base.d_free;
+    d(compaction.kept) = result.d;  // the solved rows as solved (regularization included)
+    if (!d.allFinite()) {
+      d.setZero();
+      forces.setZero();
+      report.status = SolveStatus::kNumericalFailure;
+      report.message = "W λ overflowed; forces reset to zero";
+    }
+    result.forces = std::move(forces);
+    result.d = std::move(d);
+  }
+  const std::vector<double> reported_mu = compact ? effectiveMu(base, params_.mu) : ctx.mu;
+  result.residual = naturalMapResidual(base, reported_mu, result.forces, result.d, ctx.ignored);
+  result.states = classifyContacts(base, reported_mu, result.forces, ctx.ignored);
   result.status = report.status;
   result.converged = report.status == SolveStatus::kConverged;
   result.iterations = report.iterations;
@@ -309,7 +391,7 @@ SolveResult ContactSolver::solve(const Problem& input) {
     }
     result.message += std::string(result.message.empty() ? "" : "; ") + note;
   }
-  if (!failedToRun(result.status)) rememberForces(problem, ctx.offsets, result.forces);
+  if (!failedToRun(result.status)) rememberForces(base, base.rowOffsets(), result.forces);
   result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }

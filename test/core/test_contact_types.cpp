@@ -101,5 +101,65 @@ TEST(ContactTypes, ValidationNamesTheFault) {
   EXPECT_EQ(rowsForType(ContactType::kRolling), 6);
 }
 
+// μ = 0 frictional contacts are solved as one row: the same forces, iterations and residual as
+// the problem that declares them frictionless, tangent forces zero, d on every row, and the
+// warm start kept across solves (dense and block-sparse W).
+TEST(ContactTypes, ZeroFrictionContactsAreSolvedAsOneRow) {
+  // Four contacts: 0 and 2 frictional with μ = 0, 1 with μ = 0.5, 3 with the default μ = 0.
+  Problem three;
+  for (int i = 0; i < 4; ++i) three.contacts.push_back(Contact{10 + i, ContactType::kFrictional, 3, i == 1 ? 0.5 : 0.0});
+  three.contacts[3].mu = Contact::kMuDefault;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Random(12, 12);
+  const Eigen::MatrixXd W = A * A.transpose() + 0.2 * Eigen::MatrixXd::Identity(12, 12);
+  three.W = W;
+  three.d_free = Eigen::VectorXd::Random(12);
+  three.d_free[0] = three.d_free[3] = three.d_free[6] = three.d_free[9] = -1.0;  // all pressed
+  // The same problem written with frictionless contacts.
+  Problem one = three;
+  std::vector<int> rows = {0, 3, 4, 5, 6, 9};
+  for (int i : {0, 2, 3}) {
+    one.contacts[i].type = ContactType::kFrictionless;
+    one.contacts[i].rows = 1;
+  }
+  one.W = Eigen::MatrixXd(W(rows, rows));
+  one.d_free = three.d_free(rows);
+  SolverParams params;
+  params.mu = 0.0;
+  params.tolerance = 1e-12;
+  params.solver = SolverKind::kNlgs;
+  params.initial_guess = false;
+  for (bool sparse : {false, true}) {
+    SCOPED_TRACE(sparse ? "block-sparse" : "dense");
+    Problem p = three;
+    if (sparse) {
+      BlockSparseMatrix m = BlockSparseMatrix::withBlockSizes({3, 3, 3, 3});
+      for (int i = 0; i < 4; ++i) {
+        m.beginRow();
+        for (int j = 0; j < 4; ++j) m.addBlock(j, W.block(3 * i, 3 * j, 3, 3));
+      }
+      p.W = m;
+    }
+    const SolveResult full = solveProblem(p, params), reduced = solveProblem(one, params);
+    ASSERT_EQ(full.status, SolveStatus::kConverged) << full.message;
+    ASSERT_EQ(full.forces.size(), 12);
+    EXPECT_EQ(full.iterations, reduced.iterations);
+    EXPECT_LE((full.forces(rows) - reduced.forces).lpNorm<Eigen::Infinity>(), 1e-12);
+    for (int r : {1, 2, 7, 8, 10, 11}) EXPECT_EQ(full.forces[r], 0.0) << "row " << r;
+    const Eigen::VectorXd d = W * full.forces + three.d_free;
+    EXPECT_LE((full.d - d).lpNorm<Eigen::Infinity>(), 1e-12);
+    // The same errors, normalised by the full d_free (tangent rows included).
+    EXPECT_NEAR(full.residual, reduced.residual * one.d_free.norm() / three.d_free.norm(), 1e-15);
+    EXPECT_EQ(full.states, reduced.states);
+  }
+  // Warm start by id survives: the second solve of the same problem starts where it ended.
+  params.initial_guess = true;
+  params.tolerance = 1e-8;
+  ContactSolver solver(params);
+  const SolveResult cold = solver.solve(three);
+  const SolveResult warm = solver.solve(three);
+  ASSERT_TRUE(cold.converged && warm.converged);
+  EXPECT_LT(warm.iterations, cold.iterations);
+}
+
 }  // namespace
 }  // namespace lcp_contact_solver
