@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -51,15 +53,6 @@ inline std::vector<int> parseIntList(const std::string& s) {
   std::string item;
   while (std::getline(in, item, ','))
     if (!item.empty()) out.push_back(std::stoi(item));
-  return out;
-}
-
-inline std::vector<double> parseDoubleList(const std::string& s) {
-  std::vector<double> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(std::stod(item));
   return out;
 }
 
@@ -142,76 +135,109 @@ inline lcs::Problem deriveUniform(const lcs::Problem& src, const ContactModel& m
   return deriveProblem(src, std::vector<ContactModel>(src.contacts.size(), m));
 }
 
-struct Timed {
-  double best = 0.0;    // s, fastest run
-  double median = 0.0;  // s
-  int runs = 0;
-  lcs::SolveResult result;  // of the fastest run
-};
-
-// Solves `problem` cold (no warm start memory) until at least `min_total` seconds and
-// `min_runs` runs have passed; a single run longer than `single_run` seconds is not repeated.
-inline Timed timeSolve(const lcs::Problem& problem, const lcs::SolverParams& params, double min_total = 0.05,
-                       int min_runs = 3, double single_run = 0.5) {
-  Timed t;
-  t.best = std::numeric_limits<double>::infinity();
-  std::vector<double> times;
-  double total = 0.0;
-  while (static_cast<int>(times.size()) < min_runs || total < min_total) {
-    const auto t0 = Clock::now();
-    lcs::SolveResult r = lcs::solveProblem(problem, params);
-    const double s = secondsSince(t0);
-    times.push_back(s);
-    total += s;
-    if (s < t.best) {
-      t.best = s;
-      t.result = std::move(r);
-    }
-    if (times.size() == 1 && s > single_run) break;
-    if (times.size() >= 1000) break;
-  }
-  std::sort(times.begin(), times.end());
-  t.median = times[times.size() / 2];
-  t.runs = static_cast<int>(times.size());
-  return t;
+// CPU time of the calling thread (user + system), s. The benchmarks time with it because
+// the machine they run on is shared (load ~4 on 2 cores): a solve is descheduled for a random
+// part of its wall time, which CPU time does not count.
+inline double threadCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// Time per Gauss-Seidel sweep (pgs/nlgs, or what auto resolves to at a fixed sweep count):
-// (t(warm + sweeps) - t(warm)) / (their sweep difference), each the fastest of several runs,
-// SOFA's stopping rule at an unreachable tolerance so no residual is evaluated per sweep and
-// every run does exactly its sweeps. setup = t(warm) - warm sweeps.
-struct SweepTiming {
-  double per_sweep = std::numeric_limits<double>::quiet_NaN();  // s
-  double setup = std::numeric_limits<double>::quiet_NaN();      // s
-  int sweeps = 0;
-  std::string solver;  // what ran
-  lcs::SolveResult result;  // of the long run
+// Time per Gauss-Seidel sweep (pgs/nlgs, or what auto resolves to at a fixed sweep count),
+// SOFA's stopping rule at an unreachable tolerance so that no residual is evaluated per sweep
+// and every run does exactly its sweeps, cold start:
+//   per_sweep = t(warm + sweeps) / (warm + sweeps), the whole solve divided (setup included);
+//   marginal  = (t(warm + sweeps) - t(warm)) / sweeps, the sweep alone (noisier: a difference);
+//   setup     = t(warm) - warm * marginal.
+// Measured in rounds (sweepRound), which the benchmarks interleave across the variants they
+// compare, so that a slow spell of the shared machine does not fall on one variant only;
+// each time is the fastest over all rounds.
+struct SweepAcc {
+  double best_short = std::numeric_limits<double>::infinity();
+  double best_long = std::numeric_limits<double>::infinity();
+  int it_short = 0, it_long = 0;
+  lcs::SolveResult result;  // of the fastest long run
 };
 
-inline SweepTiming timePerSweep(const lcs::Problem& problem, lcs::SolverParams params, int sweeps, int warm = 5,
-                                double min_total = 0.03) {
+inline void sweepRound(const lcs::Problem& problem, lcs::SolverParams params, int sweeps, SweepAcc* acc,
+                       double min_total = 0.02, int min_pairs = 2, int warm = 5) {
   params.stopping_rule = lcs::StoppingRule::kSofa;
   params.tolerance = 1e-300;
   params.time_budget = 0.0;
   params.initial_guess = false;
-  SweepTiming out;
-  params.maxIt = warm;
-  const Timed a = timeSolve(problem, params, min_total, 3, 1e9);
-  params.maxIt = warm + sweeps;
-  const Timed b = timeSolve(problem, params, min_total, 3, 1e9);
-  out.solver = b.result.solver;
-  out.sweeps = b.result.iterations - a.result.iterations;
-  if (out.sweeps > 0) {
-    out.per_sweep = std::max(0.0, (b.best - a.best) / out.sweeps);
-    out.setup = std::max(0.0, a.best - a.result.iterations * out.per_sweep);
+  lcs::SolverParams short_params = params, long_params = params;
+  short_params.maxIt = warm;
+  long_params.maxIt = warm + sweeps;
+  double total = 0.0;
+  for (int k = 0; k < min_pairs || (total < min_total && k < 2000); ++k) {
+    double c0 = threadCpuSeconds();
+    lcs::SolveResult a = lcs::solveProblem(problem, short_params);
+    const double ts = threadCpuSeconds() - c0;
+    c0 = threadCpuSeconds();
+    lcs::SolveResult b = lcs::solveProblem(problem, long_params);
+    const double tl = threadCpuSeconds() - c0;
+    total += ts + tl;
+    acc->best_short = std::min(acc->best_short, ts);
+    acc->it_short = a.iterations;
+    if (tl < acc->best_long) {
+      acc->best_long = tl;
+      acc->it_long = b.iterations;
+      acc->result = std::move(b);
+    }
   }
-  out.result = b.result;
+}
+
+struct SweepTiming {
+  double per_sweep = std::numeric_limits<double>::quiet_NaN();  // s, whole solve / sweeps
+  double marginal = std::numeric_limits<double>::quiet_NaN();   // s
+  double setup = std::numeric_limits<double>::quiet_NaN();      // s
+  int sweeps = 0;        // of the long run
+  std::string solver;    // what ran
+  lcs::SolveResult result;
+};
+
+inline SweepTiming sweepTiming(const SweepAcc& acc) {
+  SweepTiming out;
+  out.solver = acc.result.solver;
+  out.sweeps = acc.it_long;
+  out.result = acc.result;
+  if (acc.it_long > 0) out.per_sweep = acc.best_long / acc.it_long;
+  const int d = acc.it_long - acc.it_short;
+  if (d > 0) {
+    out.marginal = std::max(0.0, (acc.best_long - acc.best_short) / d);
+    out.setup = std::max(0.0, acc.best_short - acc.it_short * out.marginal);
+  }
   return out;
 }
 
-// Sweeps so that they take a few milliseconds: ~`row_sweeps` row updates in total.
-inline int sweepsFor(int rows, double row_sweeps = 4e5, int lo = 20, int hi = 4000) {
-  return std::clamp(static_cast<int>(row_sweeps / std::max(rows, 1)), lo, hi);
+// A solve to a tolerance, in rounds like sweepRound: one run per round (none once a run took
+// longer than `single_run` s); the fastest counts.
+struct SolveAcc {
+  double best = std::numeric_limits<double>::infinity();  // s CPU
+  double wall = std::numeric_limits<double>::infinity();  // s wall of that run
+  int runs = 0;
+  lcs::SolveResult result;
+};
+
+inline void solveRound(const lcs::Problem& problem, const lcs::SolverParams& params, SolveAcc* acc,
+                       double min_total = 0.01, double single_run = 0.3) {
+  if (acc->runs > 0 && acc->best > single_run) return;
+  double total = 0.0;
+  do {
+    const double c0 = threadCpuSeconds();
+    const auto t0 = Clock::now();
+    lcs::SolveResult r = lcs::solveProblem(problem, params);
+    const double w = secondsSince(t0);
+    const double s = threadCpuSeconds() - c0;
+    total += s;
+    ++acc->runs;
+    if (s < acc->best) {
+      acc->best = s;
+      acc->wall = w;
+      acc->result = std::move(r);
+    }
+  } while (total < min_total && acc->best <= single_run);
 }
 
 }  // namespace lcs_bench

@@ -1,10 +1,11 @@
 // End-to-end latency and sustained rate of the live solver (issue #8; docs/BENCHMARKS.md
 // "Latency and rate"; run by bench/latency.sh). A benchmark, never a test.
 //
-//   latency [--bases 5,16] [--balls N,...] [--steps 3] [--count 200] [--warmup 20]
+//   latency_bench [--bases 5,16] [--balls N,...] [--steps 3] [--count 200] [--warmup 20]
 //           [--rate-seconds 10] [--latency-seconds 30] [--inflight 1,4] [--label NAME] [--solver-pid PID]
 //           [--in-process-nodelet] [--markers 0|1] [--out FILE.csv]
-//   latency --sink TOPIC [--duration S]      (a marker subscriber that only counts)
+//   latency_bench --sink TOPIC [--duration S]      (a marker subscriber that only counts)
+//   latency_bench --reference-only [--bases ...] [--out FILE.csv]   (the node's cycle in-process, by part)
 //
 // Problems: bench/scene_problems.h (brick pyramids with box_stack's bodies: base 5 ≈ 100
 // contacts, base 16 ≈ 1000), each turned into a ContactArray (ids, μ, types, rows, d_free,
@@ -78,6 +79,7 @@ struct Options {
   std::string label = "node";
   int solver_pid = 0;
   bool in_process_nodelet = false;
+  bool reference_only = false;
   int markers = 0;
   std::string out = "bench/results/latency.csv";
   std::string sink;
@@ -86,11 +88,12 @@ struct Options {
 
 int usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: latency [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] [--rate-seconds S]\n"
+               "usage: latency_bench [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] [--rate-seconds S]\n"
                "               [--latency-seconds S]\n"
                "               [--inflight 1,4] [--label NAME] [--solver-pid PID] [--in-process-nodelet]\n"
                "               [--markers 0|1] [--out FILE.csv]\n"
-               "       latency --sink TOPIC [--duration S]\n");
+               "       latency_bench --sink TOPIC [--duration S]\n"
+               "       latency_bench --reference-only [--bases 5,16] [--out FILE.csv]\n");
   return code;
 }
 
@@ -327,6 +330,63 @@ class Sender {
   ros::Time last_;
 };
 
+// The node's cycle in-process, part by part, on the same messages (no solver process):
+// conversion (toProblem), the core solve, the forces message (toConstraintForcesMsg), the
+// whole CycleSolver::solve, serialization both ways, markers. Median wall times of repeats.
+template <class Cases>
+int runReference(const Options& o, const lros::NodeSettings& settings, Cases& problems) {
+  const lcs::SolverParams& params = settings.solver;
+  std::ifstream probe(o.out);
+  const bool fresh = !probe.good() || probe.peek() == std::ifstream::traits_type::eof();
+  probe.close();
+  std::ofstream csv(o.out, std::ios::app);
+  if (fresh)
+    csv << "problem,contacts,rows,warm_start,to_problem_ms,solve_ms,solve_iterations,forces_msg_ms,cycle_ms,"
+         "serialize_in_ms,serialize_out_ms,msg_in_bytes,msg_out_bytes,markers_build_ms,marker_bytes,load1\n";
+  std::printf("| problem | contacts | warm start | toProblem (ms) | solve (ms) | toConstraintForcesMsg (ms) | whole cycle "
+              "(ms) | serialize + deserialize in / out (ms) | bytes in / out | markers build (ms, bytes) |\n"
+              "|---|---:|---|---:|---:|---:|---:|---|---|---|\n");
+  for (auto& p : problems) {
+    lcs::Problem converted;
+    std::vector<lros::ContactFrame> frames;
+    const double t_convert = medianTime([&] {
+      converted = lcs::Problem();
+      frames.clear();
+      lros::toProblem(p.contacts, p.compliance, 0, &converted, &frames);
+    });
+    lcs::ContactSolver solver(params);
+    if (params.initial_guess) solver.solve(converted);
+    lcs::SolveResult result;
+    const double t_solve = medianTime([&] { result = solver.solve(converted); });
+    lcs::ConstraintForces forces;
+    const double t_forces = medianTime([&] { forces = lros::toConstraintForcesMsg(p.contacts, frames, converted, result); });
+    lros::CycleSolver cycle(params);
+    if (params.initial_guess) cycle.solve(p.contacts, p.compliance, true);
+    lros::CycleOutput out;
+    const double t_cycle = medianTime([&] { out = cycle.solve(p.contacts, p.compliance, true); });
+    const double t_ser_in = serializationTime(p.contacts) + serializationTime(p.compliance);
+    const double t_ser_out = serializationTime(out.forces) + serializationTime(out.stats);
+    const std::uint32_t bytes_in = wireBytes(p.contacts) + wireBytes(p.compliance);
+    const std::uint32_t bytes_out = wireBytes(out.forces) + wireBytes(out.stats);
+    const std::vector<double> mu = lcs::effectiveMu(out.problem, params.mu);
+    visualization_msgs::MarkerArray markers;
+    const double t_markers = medianTime(
+        [&] { markers = lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display); });
+    const std::uint32_t marker_bytes = wireBytes(markers);
+    csv << p.name << ',' << p.problem.contacts.size() << ',' << p.problem.rowCount() << ','
+        << (params.initial_guess ? 1 : 0) << ',' << 1e3 * t_convert << ',' << 1e3 * t_solve << ','
+        << result.iterations << ',' << 1e3 * t_forces << ',' << 1e3 * t_cycle << ',' << 1e3 * t_ser_in << ','
+        << 1e3 * t_ser_out << ',' << bytes_in << ',' << bytes_out << ',' << 1e3 * t_markers << ',' << marker_bytes
+        << ',' << lcs_bench::loadAverage1() << '\n';
+    std::printf("| %s | %zu | %s | %.3f | %.3f (%d it) | %.3f | %.3f | %.3f / %.3f | %u / %u | %.3f, %u |\n",
+                p.name.c_str(), p.problem.contacts.size(), params.initial_guess ? "on" : "off", 1e3 * t_convert,
+                1e3 * t_solve, result.iterations, 1e3 * t_forces, 1e3 * t_cycle, 1e3 * t_ser_in, 1e3 * t_ser_out,
+                bytes_in, bytes_out, 1e3 * t_markers, marker_bytes);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int runSink(const Options& o) {
   ros::NodeHandle nh;
   std::atomic<long> count{0};
@@ -368,6 +428,10 @@ int main(int argc, char** argv) {
       o.in_process_nodelet = true;
       continue;
     }
+    if (a == "--reference-only") {
+      o.reference_only = true;
+      continue;
+    }
     if (i + 1 >= argc) return usage(2);
     const std::string v = argv[++i];
     if (a == "--bases") o.bases = lcs_bench::parseIntList(v);
@@ -404,6 +468,8 @@ int main(int argc, char** argv) {
     Case p{sp.name, sp.problem, toArrayMsg(sp.problem), lros::toComplianceMsg(sp.problem)};
     problems.push_back(std::move(p));
   }
+
+  if (o.reference_only) return runReference(o, settings, problems);
 
   std::unique_ptr<nodelet::Loader> loader;
   if (o.in_process_nodelet) {

@@ -5,11 +5,13 @@
 # (bench/latency.cpp: round trips with one pair in flight, then N in flight for a while), and
 # stops it again.
 #
-#   bench/latency.sh [--build DIR] [--csv OUT.csv] [--modes node,nodelet,inproc]
+#   bench/latency.sh [--build DIR] [--csv OUT.csv] [--modes reference,node,nodelet,inproc]
 #                    [--starts cold,warm] [--markers 0,1] [--bases 5,16] [--count N]
 #                    [--rate-seconds S] [--latency-seconds S] [--inflight 1,4] [--param NAME=VALUE]...
 #
-# Modes: node    contact_solver_node, its own process (messages over TCP, serialized)
+# Modes: reference  no solver process: the node's cycle in-process, part by part, on the same
+#                messages (latency_bench --reference-only; CSV <csv>_reference.csv)
+#        node    contact_solver_node, its own process (messages over TCP, serialized)
 #        nodelet nodelet manager + `nodelet load lcp_contact_solver/ContactSolverNodelet`: the
 #                publisher (latency_bench) is another process, so messages still go over TCP
 #        inproc  the nodelet loaded into latency_bench itself (nodelet::Loader): publisher and
@@ -18,8 +20,9 @@
 #         warm  initial_guess=true (the default): the same problem again with the same contact
 #               ids, so after the first cycle the warm start is already the answer
 # Markers: 1 runs a second process subscribed to /contact_solver/markers (node mode only).
-# Defaults: build folder ./build-bench8, all modes and starts, markers 0 and 1 (node),
-# CSV bench/results/latency.csv (replaced), the tables in the .log beside it. A private
+# Defaults: build folder ./build-bench8, all four modes and both starts, markers 0 and 1 (node),
+# CSV bench/results/latency.csv (replaced), the tables in the .log beside it (`--modes
+# reference` alone writes latency_reference.{csv,log} and leaves latency.{csv,log} alone). A private
 # roscore on a free port, logs in <build>/ros_home; everything started is stopped on exit.
 set -uo pipefail
 export PATH=/usr/bin:/bin:$PATH  # Debian's python3 first: a pyenv python3 breaks rospy tools
@@ -27,7 +30,7 @@ export PATH=/usr/bin:/bin:$PATH  # Debian's python3 first: a pyenv python3 break
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$here/build-bench8"
 csv="$here/bench/results/latency.csv"
-modes="node,nodelet,inproc"
+modes="reference,node,nodelet,inproc"
 starts="cold,warm"
 markers_list="0,1"
 bench_args=()
@@ -41,11 +44,12 @@ while [ $# -gt 0 ]; do
     --markers) markers_list="$2"; shift 2 ;;
     --bases | --balls | --count | --rate-seconds | --latency-seconds | --inflight | --steps | --warmup) bench_args+=("$1" "$2"); shift 2 ;;
     --param) params+=("$2"); shift 2 ;;
-    -h | --help) sed -n '2,24p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,26p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "latency.sh: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
 done
 log="${csv%.csv}.log"
+[ "$modes" = reference ] && log="${csv%.csv}_reference.log"  # a reference-only run keeps the other files
 bin="$build/devel/lib/lcp_contact_solver"
 for exe in contact_solver_node latency_bench; do
   if [ ! -x "$bin/$exe" ]; then
@@ -64,7 +68,8 @@ bin="$build/devel/lib/lcp_contact_solver"
 export ROS_HOME="$build/ros_home"
 export ROS_LOG_DIR="$ROS_HOME/log"
 mkdir -p "$ROS_LOG_DIR" "$(dirname "$csv")"
-rm -f "$csv"
+[ "$modes" = reference ] || rm -f "$csv"
+[[ ",$modes," == *,reference,* ]] && rm -f "${csv%.csv}_reference.csv"
 set +u
 # shellcheck disable=SC1091
 source "$build/devel/setup.bash"
@@ -128,6 +133,13 @@ for mode in "${mode_arr[@]}"; do
           extra=(--solver-pid "$solver_pid") ;;
         inproc)
           extra=(--in-process-nodelet) ;;
+        reference)
+          [ "$markers" = 1 ] && continue
+          echo "== reference (in-process cycle by part), $start start; load $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$log"
+          "$bin/latency_bench" --reference-only --out "${csv%.csv}_reference.csv" "${bench_args[@]}" \
+            2>>"$ROS_LOG_DIR/latency_bench.err" | tee -a "$log"
+          [ "${PIPESTATUS[0]}" -eq 0 ] || { echo "latency.sh: latency_bench --reference-only failed" | tee -a "$log"; status=1; }
+          continue ;;
         *) echo "latency.sh: unknown mode $mode" >&2; exit 2 ;;
       esac
       if [ "$markers" = 1 ]; then

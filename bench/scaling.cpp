@@ -1,8 +1,8 @@
 // Scaling from ~10 to ~10,000 contacts (issue #8; docs/BENCHMARKS.md "Scaling"). In-process,
 // ROS-free; a benchmark, never a test.
 //
-//   scaling [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps 3]
-//           [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--array-mb 512] [--out FILE.csv]
+//   scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps 3]
+//                 [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--rounds 3] [--array-mb 512] [--out FILE.csv]
 //
 // Problems: bench/scene_problems.h (brick pyramids, box_stack's bodies, ~4 k² contacts for k
 // bricks at the base; sphere piles, sphere_pile's balls), taken after --pyramid-steps /
@@ -12,13 +12,19 @@
 //                 exceeds --dense-max-gb: the CSV says "skipped")
 //   block_sparse  the scene's W
 //   unbuilt       the body form (Problem::bodies, SolverParams::build_lcp = false): no W
-// Per form: bytes of the compliance, setup (local blocks etc.), time per nlgs sweep (fixed
-// sweep count, SOFA rule at an unreachable tolerance, (t(5 + S) - t(5)) / S, fastest of 3),
-// and time to a residual of 1e-4 and 1e-6 with auto (built: nlgs at 1e-4, newton ≤ 200 rows /
-// apgd above at 1e-6; unbuilt: nlgs) with a wall-clock budget (--budget s, maxIt 10^6).
+// Per form: bytes of the compliance, time per nlgs sweep (25 sweeps from a cold start, SOFA
+// rule at an unreachable tolerance: the whole solve / 25, and the marginal sweep (t(25) -
+// t(5)) / 20 with the setup t(5) - 5 marginal sweeps; bench8_util.h sweepRound), and time to a
+// residual of 1e-4 and 1e-6 with auto (built: nlgs at 1e-4, newton ≤ 200 rows / apgd above at
+// 1e-6; unbuilt: nlgs) within a wall-clock budget (--budget s, maxIt 10^6). The forms of a
+// problem are measured in --rounds interleaved rounds, the fastest counts. When some contact
+// penetrates (gap < 0, erp > 0) ContactSolver solves a stabilized copy of the problem, W
+// included; the setup of the same problem with erp = 0 (no copy) is measured beside it.
 // Bandwidth: the machine's single-thread read bandwidth, measured here (sum of a --array-mb
 // array of doubles with 8 accumulators, fastest of 5 passes, before and after), and the
 // ratio dense sweep / (bytes of W / bandwidth): 1 means a sweep costs exactly one read of W.
+// Times are CPU time of the benchmark's thread (bench8_util.h: the machine is shared), the
+// fastest of the repeats.
 #include "bench8_util.h"
 #include "scene_problems.h"
 
@@ -27,6 +33,7 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -48,30 +55,31 @@ struct Options {
   int pyramid_steps = 3, pile_steps = 30;
   double dense_max_gb = 2.0;
   double budget = 5.0;
+  int rounds = 3;
   int array_mb = 512;
   std::string out = "bench/results/scaling.csv";
 };
 
 int usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: scaling [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
-               "               [--pile-steps N] [--dense-max-gb G] [--budget S] [--array-mb MB] [--out FILE.csv]\n");
+               "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
+               "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB] [--out FILE.csv]\n");
   return code;
 }
 
 // Single-thread read bandwidth (bytes/s): sum of `mb` MB of doubles, 8 independent
-// accumulators (so the adds do not serialize), fastest of `passes`.
+// accumulators (so the adds do not serialize), fastest of `passes` in thread CPU time.
 double readBandwidth(int mb, int passes = 5) {
   const std::size_t n = static_cast<std::size_t>(mb) * 1024 * 1024 / sizeof(double);
   std::unique_ptr<double[]> a(new double[n]);
   for (std::size_t i = 0; i < n; ++i) a[i] = 1e-9 * static_cast<double>(i % 1000);
   double best = 1e300, sink = 0.0;
   for (int p = 0; p < passes; ++p) {
-    const auto t0 = Clock::now();
+    const double c0 = lcs_bench::threadCpuSeconds();
     double s[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (std::size_t i = 0; i + 8 <= n; i += 8)
       for (int k = 0; k < 8; ++k) s[k] += a[i + k];
-    const double t = secondsSince(t0);
+    const double t = lcs_bench::threadCpuSeconds() - c0;
     sink += s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7];
     best = std::min(best, t);
   }
@@ -118,6 +126,7 @@ int main(int argc, char** argv) {
     else if (a == "--pile-steps") o.pile_steps = std::stoi(v);
     else if (a == "--dense-max-gb") o.dense_max_gb = std::stod(v);
     else if (a == "--budget") o.budget = std::stod(v);
+    else if (a == "--rounds") o.rounds = std::stoi(v);
     else if (a == "--array-mb") o.array_mb = std::stoi(v);
     else if (a == "--out") o.out = v;
     else return usage(2);
@@ -133,9 +142,9 @@ int main(int argc, char** argv) {
   std::printf("scaling: read bandwidth %.2f GB/s (sum of %d MB, one thread, fastest of 5)\n", bw0 / 1e9, o.array_mb);
   std::fflush(stdout);
 
-  csv << "problem,family,bodies,contacts,rows,form,w_bytes,setup_ms,sweeps,us_per_sweep,ns_per_row_sweep,"
-         "bandwidth_gbs,read_w_us,sweep_over_read_w,t_1e-4_ms,it_1e-4,solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
-         "solver_1e-6,status_1e-6,residual_1e-6,load1\n";
+  csv << "problem,family,bodies,contacts,rows,form,w_bytes,setup_ms,sweeps,us_per_sweep,us_marginal_sweep,"
+         "ns_per_row_sweep,bandwidth_gbs,read_w_us,sweep_over_read_w,marginal_over_read_w,t_1e-4_ms,it_1e-4,solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
+         "solver_1e-6,status_1e-6,residual_1e-6,penetrating_contacts,setup_without_erp_ms,load1\n";
 
   std::vector<lcs_bench::SceneProblem> problems;
   const auto t_gen = Clock::now();
@@ -152,8 +161,9 @@ int main(int argc, char** argv) {
     problems.push_back(std::move(p[0]));
   }
 
-  std::printf("\n| problem | contacts | rows | form | W bytes | setup | µs/sweep | ns/row·sweep | sweep ÷ read(W) | "
-              "to 1e-4 (auto) | to 1e-6 (auto) |\n|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("\n| problem | contacts | rows | form | W bytes | setup (erp = 0) | µs/sweep | marginal µs/sweep | "
+              "ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
+              "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (lcs_bench::SceneProblem& sp : problems) {
     const lcs::Problem& sparse = sp.problem;
     const int nc = static_cast<int>(sparse.contacts.size()), rows = sparse.rowCount();
@@ -174,54 +184,79 @@ int main(int argc, char** argv) {
       forms.push_back({"dense", &dense, true});
     } else {
       csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense," << num(dense_bytes)
-          << ",,,,,,,,,,,skipped,,,,skipped,," << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
-      std::printf("| %s | %d | %d | dense | %s | skipped (W > %.1f GB) | | | | | |\n", sp.name.c_str(), nc, rows,
+          << ",,,,,,,,,,,,,skipped,,,,skipped,,,," << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
+      std::printf("| %s | %d | %d | dense | %s | skipped (W > %.1f GB) | | | | | | |\n", sp.name.c_str(), nc, rows,
                   human(dense_bytes).c_str(), o.dense_max_gb);
     }
     forms.push_back({"block_sparse", &sparse, true});
     if (sp.body_form.bodies) forms.push_back({"unbuilt", &sp.body_form, false});
+    // The same problems without position correction (every contact's erp = 0): ContactSolver
+    // then solves the problem as given instead of a stabilized copy of it (W included), so the
+    // setup difference is what that copy costs per solve.
+    int penetrating = 0;
+    for (const lcs::Contact& c : sparse.contacts) penetrating += c.gap < 0.0 && c.erp > 0.0 ? 1 : 0;
+    std::vector<lcs::Problem> plain(forms.size());
+    for (std::size_t i = 0; i < forms.size(); ++i) {
+      plain[i] = *forms[i].problem;
+      for (lcs::Contact& c : plain[i].contacts) c.erp = 0.0;
+    }
 
-    for (const Form& f : forms) {
-      lcs::SolverParams params;
-      params.solver = lcs::SolverKind::kNlgs;
-      params.build_lcp = f.build_lcp;
-      const int sweeps = 20;  // the early sweeps of a cold solve, where every contact still moves
-      const lcs_bench::SweepTiming st = lcs_bench::timePerSweep(*f.problem, params, sweeps);
+    // Every measurement of every form, in interleaved rounds (bench8_util.h); fastest counts.
+    const int sweeps = 20;  // 5 + 20 sweeps from a cold start, the whole solve divided
+    const double tols[2] = {1e-4, 1e-6};
+    std::vector<lcs_bench::SweepAcc> sweep_acc(forms.size()), plain_acc(forms.size());
+    std::vector<std::array<lcs_bench::SolveAcc, 2>> tol_acc(forms.size());
+    for (int round = 0; round < o.rounds; ++round)
+      for (std::size_t i = 0; i < forms.size(); ++i) {
+        lcs::SolverParams params;
+        params.solver = lcs::SolverKind::kNlgs;
+        params.build_lcp = forms[i].build_lcp;
+        lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
+        if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
+        for (int k = 0; k < 2; ++k) {
+          lcs::SolverParams p;
+          p.solver = lcs::SolverKind::kAuto;
+          p.build_lcp = forms[i].build_lcp;
+          p.tolerance = tols[k];
+          p.maxIt = 1000000;
+          p.time_budget = o.budget;
+          p.initial_guess = false;
+          lcs_bench::solveRound(*forms[i].problem, p, &tol_acc[i][k]);
+        }
+      }
+    for (std::size_t i = 0; i < forms.size(); ++i) {
+      const Form& f = forms[i];
+      const lcs_bench::SweepTiming st = lcs_bench::sweepTiming(sweep_acc[i]);
+      const lcs_bench::SweepTiming st_plain =
+          penetrating > 0 ? lcs_bench::sweepTiming(plain_acc[i]) : lcs_bench::SweepTiming{};
+      const double plain_setup = penetrating > 0 ? st_plain.setup : st.setup;
       if (st.result.unbuilt == f.build_lcp)
         std::fprintf(stderr, "%s %s: the unbuilt path was %staken\n", sp.name.c_str(), f.name.c_str(),
                      st.result.unbuilt ? "" : "not ");
       const double bytes = static_cast<double>(lcs_bench::bytesOfCompliance(*f.problem));
       const double read_w = bytes / bw0;
-      // To a tolerance: auto, cold, budget.
-      lcs_bench::Timed tol[2];
-      const double tols[2] = {1e-4, 1e-6};
-      for (int k = 0; k < 2; ++k) {
-        lcs::SolverParams p;
-        p.solver = lcs::SolverKind::kAuto;
-        p.build_lcp = f.build_lcp;
-        p.tolerance = tols[k];
-        p.maxIt = 1000000;
-        p.time_budget = o.budget;
-        p.initial_guess = false;
-        tol[k] = lcs_bench::timeSolve(*f.problem, p, 0.05, 3, 0.5);
-      }
-      auto t_of = [](const lcs_bench::Timed& t) { return t.result.converged ? t.best : std::nan(""); };
+      const auto& tol = tol_acc[i];
+      auto t_of = [](const lcs_bench::SolveAcc& t) { return t.result.converged ? t.best : std::nan(""); };
       csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ',' << f.name << ','
           << num(bytes) << ',' << num(1e3 * st.setup) << ',' << st.sweeps << ',' << num(1e6 * st.per_sweep) << ','
-          << num(1e9 * st.per_sweep / rows) << ',' << num(bw0 / 1e9) << ',' << num(1e6 * read_w) << ','
-          << num(st.per_sweep / read_w) << ',';
+          << num(1e6 * st.marginal) << ',' << num(1e9 * st.per_sweep / rows) << ',' << num(bw0 / 1e9) << ','
+          << num(1e6 * read_w) << ',' << num(st.per_sweep / read_w) << ',' << num(st.marginal / read_w) << ',';
       for (int k = 0; k < 2; ++k)
         csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver << ','
             << lcs::statusName(tol[k].result.status) << ',';
-      csv << num(tol[1].result.residual) << ',' << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
+      csv << num(tol[1].result.residual) << ',' << penetrating << ',' << num(1e3 * plain_setup) << ','
+          << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
       csv.flush();
       auto cell = [](double v, const char* fmt) { return std::isfinite(v) ? num(v, fmt) : std::string("–"); };
-      std::printf("| %s | %d | %d | %s | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n", sp.name.c_str(),
-                  nc, rows, f.name.c_str(), human(bytes).c_str(), std::isfinite(st.setup) ? ms(st.setup).c_str() : "–",
-                  cell(1e6 * st.per_sweep, "%.1f").c_str(), cell(1e9 * st.per_sweep / rows, "%.1f").c_str(),
-                  cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(),
-                  tol[0].result.solver.c_str(), tol[0].result.iterations, ms(t_of(tol[1])).c_str(),
-                  tol[1].result.solver.c_str(), tol[1].result.iterations);
+      const std::string setup_text = (std::isfinite(st.setup) ? ms(st.setup) : std::string("–")) + " (" +
+                                     (std::isfinite(plain_setup) ? ms(plain_setup) : std::string("–")) + ")";
+      std::printf("| %s | %d | %d | %s | %s | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n",
+                  sp.name.c_str(), nc, rows, f.name.c_str(), human(bytes).c_str(), setup_text.c_str(),
+                  cell(1e6 * st.per_sweep, "%.1f").c_str(),
+                  cell(1e6 * st.marginal, "%.1f").c_str(), cell(1e9 * st.per_sweep / rows, "%.1f").c_str(),
+                  cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(), tol[0].result.solver.c_str(),
+                  tol[0].result.iterations, ms(t_of(tol[1])).c_str(), tol[1].result.solver.c_str(),
+                  tol[1].result.iterations);
       std::fflush(stdout);
     }
   }
