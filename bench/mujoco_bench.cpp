@@ -5,6 +5,7 @@
 //   mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]
 //                [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]
 //                [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]
+//                [--threads N] [--islands on|off]
 //
 // Default models: MuJoCo's 22_humanoids and humanoid100 (libmujoco-samples), pyramidal cone.
 // Each model runs a reference trajectory with MuJoCo's own default solver (Newton); the steps
@@ -51,6 +52,8 @@ struct Options {
   std::vector<std::string> mujoco = {"pgs", "cg", "newton"};
   MujocoExtractOptions::Storage storage = MujocoExtractOptions::Storage::kAuto;
   std::string csv;
+  int threads = 0;      // SolverParams::threads of ours (0 = the core count)
+  bool islands = true;  // SolverParams::islands of ours
 };
 
 struct Row {
@@ -131,6 +134,8 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
       std::exit(2);
     }
     p.tolerance = o.target;
+    p.threads = o.threads;
+    p.islands = o.islands;
     p.maxIt = s == "lemke" ? 1000000 : 100000;
     ours.emplace(s, ContactSolver(p));
   }
@@ -251,10 +256,13 @@ int main(int argc, char** argv) {
       }
     }
     else if (a == "--csv") o.csv = value();
+    else if (a == "--threads") o.threads = std::max(0, std::atoi(value().c_str()));
+    else if (a == "--islands") o.islands = value() != "off";
     else {
       std::cerr << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
                    "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
-                   "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n";
+                   "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n"
+                   "                    [--threads N] [--islands on|off]\n";
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }

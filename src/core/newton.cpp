@@ -36,13 +36,15 @@
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
 // Each iteration costs one factorisation: dense LU for dense W, sparse LU on the
-// block pattern of W for block-sparse W.
+// block pattern of W for block-sparse W. An LCP (no friction) with symmetric W first
+// runs the active-set Newton of newton_symmetric.cpp (LDLᵀ of W_AA).
 //
 // When to use it: when high accuracy is wanted (1e-8..1e-12), on small and medium
 // problems (up to a few thousand rows), including ill-conditioned or rank-deficient W
 // where Gauss-Seidel stalls; each iteration is far more expensive than a sweep.
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "newton_symmetric.h"
 
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
@@ -341,6 +343,14 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   KernelReport report;
   const int n = problem.rowCount();
 
+  // An LCP with symmetric W takes the active-set path with LDLT (newton_symmetric.cpp); when
+  // it does not converge, the Newton below continues from its best iterate.
+  int symmetric_steps = 0;
+  {
+    KernelReport symmetric;
+    if (solveSymmetricActiveSet(ctx, lambda, &symmetric)) return symmetric;
+    symmetric_steps = symmetric.iterations;
+  }
   // Already solved (a warm start from the previous answer): nothing to do.
   {
     const double residual = ctx.residual(lambda);
@@ -488,7 +498,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
   }
   if (!lambda.allFinite() || report.status != SolveStatus::kConverged) lambda = best;
-  report.iterations = sweeps + newton_steps;
+  report.iterations = symmetric_steps + sweeps + newton_steps;
   if (report.message.empty())
     report.message = std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";
   report.solver_error = ctx.residual(lambda);

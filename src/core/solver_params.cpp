@@ -122,6 +122,7 @@ std::string validateParams(const SolverParams& p) {
   if (p.max_rows < 0) return "max_rows must be >= 0 (0 disables the limit)";
   if (!std::isfinite(p.sor) || p.sor <= 0.0 || p.sor >= 2.0) return "sor must be a number in (0, 2)";
   if (!nonNegative(p.time_budget)) return "time_budget must be a finite number >= 0 (0 disables it)";
+  if (p.threads < 0) return "threads must be >= 0 (0 = the core count)";
   if (std::string(frictionModelName(p.friction_model)) == "unknown") return "friction_model is not a known model";
   if (std::string(solverName(p.solver)) == "unknown") return "solver is not a known solver";
   if (!std::isfinite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be a number in [0, 1]";

@@ -73,6 +73,7 @@ SolveResult solveWithLemke(const Problem& problem) {
   SolverParams params;
   params.solver = SolverKind::kLemke;
   params.maxIt = 1000;
+  params.islands = false;  // the pivot counts below are those of one tableau
   return solveProblem(problem, params);
 }
 

@@ -110,6 +110,13 @@ struct SolverParams {
   ConstraintLevel constraint_level = ConstraintLevel::kPosition;
   // The step h (s) dividing β·gap at velocity level; required (> 0) only there.
   double time_step = 0.0;
+  // Solve W's independent islands separately (islands.h), each with its own stopping
+  // test; off: one kernel run on the whole problem. Not with displayDebug (the history is
+  // the whole problem's) nor the unbuilt solve.
+  bool islands = true;
+  // Threads solving islands concurrently (0 = the core count, 1 = the calling thread
+  // only). The result does not depend on it.
+  int threads = 0;
 };
 
 const char* solverName(SolverKind kind);

@@ -1,0 +1,303 @@
+#include "lcp_contact_solver/core/islands.h"
+
+#include "lcp_contact_solver/core/residual.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <numeric>
+#include <thread>
+#include <variant>
+
+namespace lcp_contact_solver {
+
+namespace {
+
+// Union-find over contacts, with path halving.
+struct DisjointSets {
+  std::vector<int> parent;
+  explicit DisjointSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// A process-wide pool: the caller works too, `threads - 1` helpers join it. Calls from
+// different threads are serialized (one island batch at a time).
+class ThreadPool {
+ public:
+  static ThreadPool& instance() {
+    static ThreadPool pool;
+    return pool;
+  }
+
+  void run(int tasks, int threads, const std::function<void(int)>& fn) {
+    std::lock_guard<std::mutex> serial(run_mutex_);
+    const int helpers = std::max(0, std::min(threads, tasks) - 1);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      while (static_cast<int>(workers_.size()) < helpers) {
+        const int index = static_cast<int>(workers_.size());
+        workers_.emplace_back([this, index] { workerLoop(index); });
+      }
+      job_ = &fn;
+      tasks_ = tasks;
+      next_.store(0);
+      helpers_ = helpers;
+      pending_ = helpers;
+      ++generation_;
+    }
+    wake_.notify_all();
+    work();
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [this] { return pending_ == 0; });
+    job_ = nullptr;
+  }
+
+  ~ThreadPool() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    for (std::thread& t : workers_) t.join();
+  }
+
+ private:
+  void work() {
+    for (int i = next_.fetch_add(1); i < tasks_; i = next_.fetch_add(1)) (*job_)(i);
+  }
+
+  void workerLoop(int index) {
+    unsigned long seen = 0;
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      if (stop_) return;
+      seen = generation_;
+      if (index >= helpers_) continue;  // not needed for this batch
+      lock.unlock();
+      work();
+      lock.lock();
+      if (--pending_ == 0) done_.notify_all();
+    }
+  }
+
+  std::mutex run_mutex_, mutex_;
+  std::condition_variable wake_, done_;
+  std::vector<std::thread> workers_;
+  const std::function<void(int)>* job_ = nullptr;
+  int tasks_ = 0;
+  std::atomic<int> next_{0};
+  int helpers_ = 0;
+  int pending_ = 0;
+  unsigned long generation_ = 0;
+  bool stop_ = false;
+};
+
+// The kernel could not run or ended on something that is not an approximate solution.
+bool failure(SolveStatus s) {
+  return s == SolveStatus::kZeroDiagonal || s == SolveStatus::kNotApplicable || s == SolveStatus::kRayTermination ||
+         s == SolveStatus::kNumericalFailure || s == SolveStatus::kInvalidInput;
+}
+
+int severity(SolveStatus s) {
+  if (failure(s)) return 3;
+  if (s == SolveStatus::kTimeBudget) return 2;
+  if (s == SolveStatus::kMaxIterations) return 1;
+  return 0;
+}
+
+}  // namespace
+
+int defaultThreadCount() {
+  const unsigned n = std::thread::hardware_concurrency();
+  return n == 0 ? 1 : static_cast<int>(n);
+}
+
+Islands findIslands(const Problem& problem) {
+  const int nc = static_cast<int>(problem.contacts.size());
+  DisjointSets sets(nc);
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+    const std::vector<int> offsets = problem.rowOffsets();
+    std::vector<int> contact_of(offsets.back());
+    for (int i = 0; i < nc; ++i) std::fill(contact_of.begin() + offsets[i], contact_of.begin() + offsets[i + 1], i);
+    const int n = static_cast<int>(dense->rows());
+    for (int c = 0; c < n; ++c) {
+      const double* col = dense->data() + static_cast<std::ptrdiff_t>(c) * n;
+      const int cc = contact_of[c];
+      for (int r = 0; r < n; ++r)
+        if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);
+    }
+  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
+    for (int i = 0; i < sparse->blockCount(); ++i)
+      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
+        const int j = sparse->block_col[b];
+        if (j == i) continue;
+        const int size = (sparse->block_offset[i + 1] - sparse->block_offset[i]) *
+                         (sparse->block_offset[j + 1] - sparse->block_offset[j]);
+        const double* v = sparse->values.data() + sparse->value_start[b];
+        // A stored block of zeros couples nothing.
+        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) sets.unite(i, j);
+      }
+  }
+  Islands out;
+  out.island_of.assign(nc, -1);
+  std::vector<int> island_of_root(nc, -1);
+  for (int i = 0; i < nc; ++i) {
+    const int root = sets.find(i);
+    if (island_of_root[root] < 0) {
+      island_of_root[root] = out.count();
+      out.contacts.emplace_back();
+    }
+    out.island_of[i] = island_of_root[root];
+    out.contacts[island_of_root[root]].push_back(i);
+  }
+  return out;
+}
+
+Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts) {
+  Problem out;
+  out.name = problem.name;
+  out.contacts.reserve(contacts.size());
+  std::vector<int> rows;
+  for (int i : contacts) {
+    out.contacts.push_back(problem.contacts[i]);
+    for (int r = offsets[i]; r < offsets[i + 1]; ++r) rows.push_back(r);
+  }
+  out.d_free = problem.d_free(rows);
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+    out.W = Eigen::MatrixXd((*dense)(rows, rows));
+    return out;
+  }
+  const auto& W = std::get<BlockSparseMatrix>(problem.W);
+  std::vector<int> local(problem.contacts.size(), -1);
+  for (std::size_t k = 0; k < contacts.size(); ++k) local[contacts[k]] = static_cast<int>(k);
+  BlockSparseMatrix R;
+  R.block_offset.assign(1, 0);
+  R.row_start.assign(1, 0);
+  for (int i : contacts) {
+    R.block_offset.push_back(R.block_offset.back() + problem.contacts[i].rows);
+    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+      // Blocks to other islands are zero (findIslands), so nothing is lost.
+      const int j = local[W.block_col[b]];
+      if (j < 0) continue;
+      const int size = problem.contacts[i].rows * problem.contacts[W.block_col[b]].rows;
+      R.block_col.push_back(j);
+      R.value_start.push_back(static_cast<int>(R.values.size()));
+      R.values.insert(R.values.end(), W.values.begin() + W.value_start[b], W.values.begin() + W.value_start[b] + size);
+    }
+    R.row_start.push_back(static_cast<int>(R.block_col.size()));
+  }
+  out.W = std::move(R);
+  return out;
+}
+
+IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
+  const Problem& problem = *ctx.problem;
+  const SolverParams& params = *ctx.params;
+  islands_.resize(islands.contacts.size());
+  // Per-island tolerances. The residual is |e| / |d_free| (1 for d_free = 0); the whole
+  // problem meets tol when Σ |e_i|² <= tol² |d_free|², which holds when island i meets
+  // |e_i| <= tol |d_free| w_i with Σ w_i² <= 1. w_i² = ½ |d_free_i|² / |d_free|² + ½ / k
+  // (k islands): at most √2 tighter than the island's own relative tolerance, and an island
+  // whose d_free is tiny (or zero) is not asked for a relative accuracy it cannot reach.
+  std::vector<double> norms(islands_.size());
+  for (std::size_t k = 0; k < islands_.size(); ++k) {
+    Island& isl = islands_[k];
+    isl.contacts = std::move(islands.contacts[k]);
+    isl.problem = islandProblem(problem, ctx.offsets, isl.contacts);
+    norms[k] = isl.problem.d_free.norm();
+    for (int i : isl.contacts)
+      for (int r = ctx.offsets[i]; r < ctx.offsets[i + 1]; ++r) isl.rows.push_back(r);
+  }
+  const double whole = problem.d_free.norm();
+  const double scale = whole > 0.0 ? whole : 1.0;
+  for (std::size_t k = 0; k < islands_.size(); ++k) {
+    Island& isl = islands_[k];
+    isl.params = params;
+    if (params.stopping_rule == StoppingRule::kResidual) {
+      const double share = norms[k] / scale;
+      const double w2 = 0.5 * share * share + 0.5 / count();
+      const double own_scale = norms[k] > 0.0 ? norms[k] : 1.0;
+      isl.params.tolerance = params.tolerance * scale * std::sqrt(w2) / own_scale;
+    }
+    isl.weight = (norms[k] > 0.0 ? norms[k] : 1.0) / scale;
+    SolveContext& c = isl.ctx;
+    c.problem = &isl.problem;
+    c.params = &isl.params;
+    c.offsets = isl.problem.rowOffsets();
+    c.regularization = ctx.regularization;
+    c.has_deadline = ctx.has_deadline;
+    c.deadline = ctx.deadline;
+    c.mu.reserve(isl.contacts.size());
+    for (int i : isl.contacts) c.mu.push_back(ctx.mu[i]);
+    c.ignored.assign(isl.contacts.size(), false);
+  }
+}
+
+KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kernel, Eigen::VectorXd& lambda,
+                               int threads) {
+  for (Island& isl : islands_) {
+    for (std::size_t k = 0; k < isl.contacts.size(); ++k) isl.ctx.ignored[k] = ctx.ignored[isl.contacts[k]];
+    isl.lambda = lambda(isl.rows);
+  }
+  std::vector<std::exception_ptr> errors(islands_.size());
+  const std::function<void(int)> task = [&](int k) {
+    try {
+      islands_[k].report = kernel(islands_[k].ctx, islands_[k].lambda);
+    } catch (...) {
+      errors[k] = std::current_exception();
+    }
+  };
+  if (threads <= 1 || count() == 1) {
+    for (int k = 0; k < count(); ++k) task(k);
+  } else {
+    ThreadPool::instance().run(count(), threads, task);
+  }
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+
+  // The island whose report speaks for the solve: the worst status, then the most
+  // iterations. Its report is copied whole (message and any per-kernel detail).
+  const Island* worst = &islands_.front();
+  for (const Island& isl : islands_) {
+    const KernelReport& r = isl.report;
+    if (severity(r.status) > severity(worst->report.status) ||
+        (severity(r.status) == severity(worst->report.status) && r.iterations > worst->report.iterations))
+      worst = &isl;
+  }
+  KernelReport out = worst->report;
+  out.history.clear();
+  bool friction_model_set = false;
+  for (const Island& isl : islands_) {
+    lambda(isl.rows) = isl.lambda;
+    out.solver_error = std::max(out.solver_error, isl.report.solver_error);
+    out.iterations = std::max(out.iterations, isl.report.iterations);
+    if (!friction_model_set && isl.ctx.hasFriction()) {
+      out.friction_model = isl.report.friction_model;
+      friction_model_set = true;
+    }
+  }
+  // Residuals are |e_i| / |d_free_i|: the whole problem's is the weighted 2-norm of them.
+  if (ctx.params->stopping_rule == StoppingRule::kResidual) {
+    double sum = 0.0;
+    for (const Island& isl : islands_) {
+      const double e = isl.report.solver_error * isl.weight;
+      sum += e * e;
+    }
+    out.solver_error = std::sqrt(sum);
+  }
+  return out;
+}
+
+}  // namespace lcp_contact_solver

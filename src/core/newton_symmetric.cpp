@@ -1,0 +1,260 @@
+// Active-set Newton for the LCP with symmetric W (frictionless and bilateral rows; MuJoCo's
+// pyramidal steps, μ = 0 contacts, joint limits).
+//
+// Derivation. The LCP 0 <= λ ⟂ u = W λ + q >= 0 (bilateral rows: u = 0, λ free) is
+// Φ(λ) = min(λ, ρ u) = 0 row by row (ρ_i = 1 / W_ii > 0 only scales). For a given active
+// set A = {i : λ_i - ρ_i u_i > 0} ∪ {bilateral rows} and its complement I, the generalised
+// Jacobian of Φ has rows ρ_i W_i on A and e_iᵀ on I, so the semismooth Newton step lands on
+//   λ_I = 0,   W_AA λ_A = -q_A,
+// whatever the current λ (the step is the primal-dual active-set method of Hintermüller,
+// Ito and Kunisch). W_AA is a principal submatrix of the symmetric positive (semi)definite
+// W, so it is factorised by LDLᵀ, not LU: half the work and no pivoting across rows. The
+// next set follows from the new λ and u: a row with λ_i <= 0 leaves A, one with u_i < 0
+// joins it. When the set repeats, λ solves the LCP up to the conditioning of W_AA; one step
+// of iterative refinement (residual u_A of the true W) removes round-off and any asymmetry
+// below kSymmetryTolerance. The method is exact in finitely many steps when W is an
+// M-matrix and locally exact in one step once the set is right, which a warm start from
+// the previous solve (the last active set, by contact id) usually provides; elsewhere it
+// can cycle, so it is capped and runNewton's globalised Newton continues from the best
+// iterate.
+//
+// Factorisation: small or dense W: W_AA gathered into a dense matrix (Eigen::LDLT). Larger
+// block-sparse W: Eigen's SimplicialLDLT on a matrix with W's full pattern in which the
+// rows and columns of I are replaced by the identity, so the pattern (and the AMD ordering
+// and elimination tree, analysed once per solve) is the same at every iteration.
+#include "newton_symmetric.h"
+
+#include "lcp_contact_solver/core/residual.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <variant>
+
+namespace lcp_contact_solver {
+namespace {
+
+constexpr int kMaxSteps = 30;
+constexpr double kSymmetryTolerance = 1e-10;  // |W_ij - W_ji| relative to the largest |W_ii|
+constexpr int kDenseMaxRows = 128;            // block-sparse W up to this size goes dense
+
+enum class Role : std::uint8_t { kZero, kUnilateral, kEquality };
+
+// Row roles; false when some active contact is not an LCP row.
+bool rowRoles(const SolveContext& ctx, std::vector<Role>* roles) {
+  const Problem& p = *ctx.problem;
+  roles->assign(ctx.offsets.back(), Role::kZero);
+  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    const Contact& c = p.contacts[i];
+    const int off = ctx.offsets[i];
+    switch (c.type) {
+      case ContactType::kFrictionless: (*roles)[off] = Role::kUnilateral; break;
+      case ContactType::kFrictional:
+        if (ctx.mu[i] != 0.0) return false;
+        (*roles)[off] = Role::kUnilateral;  // tangent rows stay zero
+        break;
+      case ContactType::kBilateral:
+        for (int k = 0; k < c.rows; ++k) (*roles)[off + k] = Role::kEquality;
+        break;
+      default: return false;
+    }
+  }
+  return true;
+}
+
+class ReducedSystem {
+ public:
+  virtual ~ReducedSystem() = default;
+  // Factorises W_AA (+ r I); false when it is not positive definite.
+  virtual bool factorize(const std::vector<char>& active) = 0;
+  // x_A = W_AA⁻¹ rhs_A, x_I = 0.
+  virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
+  // u = (W + r I) λ, from the system's own copy (dense for small W: no block loop).
+  virtual void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const = 0;
+  virtual Eigen::VectorXd diagonal() const = 0;  // of W + r I
+};
+
+class DenseReduced : public ReducedSystem {
+ public:
+  explicit DenseReduced(Eigen::MatrixXd W) : W_(std::move(W)) {}
+  bool factorize(const std::vector<char>& active) override {
+    index_.clear();
+    for (int i = 0; i < static_cast<int>(active.size()); ++i)
+      if (active[i]) index_.push_back(i);
+    const int m = static_cast<int>(index_.size());
+    M_.resize(m, m);
+    for (int c = 0; c < m; ++c)
+      for (int r = c; r < m; ++r) M_(r, c) = W_(index_[r], index_[c]);  // LDLT reads the lower half
+    ldlt_.compute(M_);
+    return ldlt_.info() == Eigen::Success && (m == 0 || ldlt_.vectorD().minCoeff() > 0.0);
+  }
+  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
+    x.setZero(rhs.size());
+    if (index_.empty()) return;
+    b_ = rhs(index_);
+    y_ = ldlt_.solve(b_);
+    x(index_) = y_;
+  }
+  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override { u.noalias() = W_ * lambda; }
+  Eigen::VectorXd diagonal() const override { return W_.diagonal(); }
+
+ private:
+  Eigen::MatrixXd W_, M_;
+  std::vector<int> index_;
+  Eigen::VectorXd b_, y_;
+  Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
+};
+
+class SparseReduced : public ReducedSystem {
+ public:
+  // `S`: W + r I with every diagonal entry stored, compressed, both triangles.
+  explicit SparseReduced(Eigen::SparseMatrix<double> S) : S_(std::move(S)), K_(S_) {
+    ldlt_.analyzePattern(K_);
+  }
+  bool factorize(const std::vector<char>& active) override {
+    const int n = static_cast<int>(S_.cols());
+    const double* w = S_.valuePtr();
+    double* k = K_.valuePtr();
+    const int* outer = S_.outerIndexPtr();
+    const int* inner = S_.innerIndexPtr();
+    for (int c = 0; c < n; ++c)
+      for (int p = outer[c]; p < outer[c + 1]; ++p) {
+        const int r = inner[p];
+        k[p] = active[r] && active[c] ? w[p] : (r == c ? 1.0 : 0.0);
+      }
+    ldlt_.factorize(K_);
+    return ldlt_.info() == Eigen::Success && ldlt_.vectorD().minCoeff() > 0.0;
+  }
+  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override { x = ldlt_.solve(rhs); }
+  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override { u.noalias() = S_ * lambda; }
+  Eigen::VectorXd diagonal() const override { return S_.diagonal(); }
+
+ private:
+  Eigen::SparseMatrix<double> S_, K_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+};
+
+// W + r I as a system, or null when W is not symmetric to kSymmetryTolerance.
+std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  const int n = ctx.offsets.back();
+  const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
+  if (dense != nullptr || n <= kDenseMaxRows) {
+    Eigen::MatrixXd W = dense != nullptr ? *dense : toDense(p.W);
+    W.diagonal().array() += ctx.regularization;
+    const double scale = n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0;
+    if ((W - W.transpose()).cwiseAbs().maxCoeff() > kSymmetryTolerance * scale) return nullptr;
+    return std::make_unique<DenseReduced>(std::move(W));
+  }
+  const auto& B = std::get<BlockSparseMatrix>(p.W);
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(B.values.size() + n);
+  for (int i = 0; i < n; ++i) triplets.emplace_back(i, i, ctx.regularization);
+  for (int bi = 0; bi < B.blockCount(); ++bi)
+    for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
+      const int bj = B.block_col[s];
+      const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
+      const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
+      const double* v = B.values.data() + B.value_start[s];
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) triplets.emplace_back(r0 + r, c0 + c, v[r * cols + c]);
+    }
+  Eigen::SparseMatrix<double> S(n, n);
+  S.setFromTriplets(triplets.begin(), triplets.end());
+  S.makeCompressed();
+  const double scale = S.diagonal().cwiseAbs().maxCoeff();
+  const Eigen::SparseMatrix<double> T = S.transpose();
+  const Eigen::SparseMatrix<double> D = S - T;
+  for (int k = 0; k < D.nonZeros(); ++k)
+    if (std::abs(D.valuePtr()[k]) > kSymmetryTolerance * scale) return nullptr;
+  // The pattern of S must be symmetric too (it is when the values are): K reuses it.
+  if (T.nonZeros() != S.nonZeros()) return nullptr;
+  return std::make_unique<SparseReduced>(std::move(S));
+}
+
+}  // namespace
+
+bool symmetricLcp(const SolveContext& ctx) {
+  std::vector<Role> roles;
+  return !ctx.problem->bodies && rowRoles(ctx, &roles);
+}
+
+bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
+  const Problem& problem = *ctx.problem;
+  const SolverParams& params = *ctx.params;
+  report->iterations = 0;
+  std::vector<Role> roles;
+  if (problem.bodies || !rowRoles(ctx, &roles)) return false;
+  std::unique_ptr<ReducedSystem> system = makeSystem(ctx);
+  if (!system) return false;
+  const int n = ctx.offsets.back();
+
+  // ρ_i = 1 / (W_ii + r): only the sign of λ_i - ρ_i u_i matters, ρ keeps it scale-free.
+  Eigen::VectorXd rho = system->diagonal();
+  for (int i = 0; i < n; ++i) rho[i] = rho[i] > 0.0 ? 1.0 / rho[i] : 1.0;
+  Eigen::VectorXd u, rhs(n), x, correction;
+  auto velocities = [&](const Eigen::VectorXd& l) {
+    system->multiply(l, u);
+    u += problem.d_free;
+  };
+  velocities(lambda);
+  double best_residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
+  Eigen::VectorXd best = lambda;
+  if (best_residual <= params.tolerance) {  // the warm start solves it already
+    report->status = SolveStatus::kConverged;
+    report->solver_error = best_residual;
+    return true;
+  }
+  std::vector<char> active(n, 0), next(n, 0);
+  auto chooseSet = [&](const Eigen::VectorXd& l, std::vector<char>& set) {
+    for (int i = 0; i < n; ++i)
+      set[i] = roles[i] == Role::kEquality || (roles[i] == Role::kUnilateral && l[i] - rho[i] * u[i] > 0.0);
+  };
+  chooseSet(lambda, active);
+  bool refined = false;
+  for (int step = 0; step < kMaxSteps && step < params.maxIt; ++step) {
+    if (step > 0 && ctx.deadlinePassed()) break;
+    ++report->iterations;
+    if (!system->factorize(active)) break;  // W_AA singular: forces not unique
+    for (int i = 0; i < n; ++i) rhs[i] = active[i] ? -problem.d_free[i] : 0.0;
+    system->solve(rhs, x);
+    if (!x.allFinite()) break;
+    lambda = x;
+    velocities(lambda);
+    double residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
+    chooseSet(lambda, next);
+    if (next == active && residual > params.tolerance && !refined) {
+      // Right set, round-off (or asymmetry) left: one refinement step with the true W.
+      refined = true;
+      for (int i = 0; i < n; ++i) rhs[i] = active[i] ? u[i] : 0.0;
+      system->solve(rhs, correction);
+      lambda -= correction;
+      velocities(lambda);
+      residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
+      chooseSet(lambda, next);
+    }
+    if (residual < best_residual) {
+      best_residual = residual;
+      best = lambda;
+    }
+    if (residual <= params.tolerance) {
+      report->status = SolveStatus::kConverged;
+      report->solver_error = residual;
+      report->message = "active-set Newton on symmetric W (LDLT): " + std::to_string(report->iterations) + " steps";
+      return true;
+    }
+    if (next == active) break;  // the set is right but the tolerance is out of reach
+    active.swap(next);
+  }
+  lambda = best;
+  return false;
+}
+
+}  // namespace lcp_contact_solver

@@ -1,0 +1,320 @@
+// Islands (core/islands.h) and the symmetric active-set Newton (newton_symmetric.cpp):
+// the islands of a W made of independent groups are found (contacts interleaved across
+// groups); solving by island gives the whole problem's forces (exactly for a fixed number
+// of Gauss-Seidel sweeps, to 1e-10 for unique solutions at tight tolerance), and the same
+// forces bit for bit whatever the thread count; the symmetric Newton path returns forces
+// whose residual, recomputed here from W, d_free and the forces, meets the tolerance.
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/islands.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
+namespace lcp_contact_solver {
+namespace {
+
+enum class Kinds { kFrictionless, kFrictional, kMixed };
+
+// `groups` independent groups of `per_group` contacts. Within a group W = J Jᵀ / m + δ I
+// (J random, rank limited by `dof` so that W can be singular when δ = 0), groups do not
+// touch; the contacts of all groups are shuffled together so that islands are not
+// contiguous ranges.
+struct Generated {
+  Problem problem;
+  std::vector<int> group_of;  // per contact
+};
+
+Generated generate(int groups, int per_group, Kinds kinds, unsigned seed, double delta = 1e-3, int dof = 12) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.0, 1.0);
+  const int nc = groups * per_group;
+  std::vector<int> order(nc);
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), rng);
+  Generated g;
+  g.group_of.resize(nc);
+  for (int i = 0; i < nc; ++i) {
+    g.group_of[i] = order[i] % groups;
+    Contact c;
+    c.id = 100 + i;
+    const bool frictional = kinds == Kinds::kFrictional || (kinds == Kinds::kMixed && pos(rng) < 0.5);
+    c.type = frictional ? ContactType::kFrictional : ContactType::kFrictionless;
+    c.rows = frictional ? 3 : 1;
+    c.mu = frictional ? 0.3 + 0.5 * pos(rng) : -1.0;
+    g.problem.contacts.push_back(c);
+  }
+  const std::vector<int> off = g.problem.rowOffsets();
+  const int n = off.back();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, groups * dof);
+  for (int i = 0; i < nc; ++i)
+    for (int r = off[i]; r < off[i + 1]; ++r)
+      for (int k = 0; k < dof; ++k) J(r, g.group_of[i] * dof + k) = u(rng);
+  Eigen::MatrixXd W = J * J.transpose() * 0.1;
+  W.diagonal().array() += delta;
+  g.problem.W = W;
+  g.problem.d_free.resize(n);
+  for (int i = 0; i < nc; ++i)
+    for (int r = off[i]; r < off[i + 1]; ++r) g.problem.d_free[r] = r == off[i] ? -0.5 + 0.8 * pos(rng) : 0.3 * u(rng);
+  return g;
+}
+
+Problem blockSparse(const Problem& dense_problem) {
+  Problem p = dense_problem;
+  const Eigen::MatrixXd W = toDense(dense_problem.W);
+  const std::vector<int> off = dense_problem.rowOffsets();
+  std::vector<int> sizes;
+  for (const Contact& c : dense_problem.contacts) sizes.push_back(c.rows);
+  BlockSparseMatrix S = BlockSparseMatrix::withBlockSizes(sizes);
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    S.beginRow();
+    for (std::size_t j = 0; j < sizes.size(); ++j) {
+      const Eigen::MatrixXd block = W.block(off[i], off[j], sizes[i], sizes[j]);
+      if (i == j || block.cwiseAbs().maxCoeff() > 0.0) S.addBlock(static_cast<int>(j), block);
+    }
+  }
+  p.W = S;
+  return p;
+}
+
+SolverParams paramsFor(SolverKind kind, double tolerance, int max_it, bool islands, int threads = 1) {
+  SolverParams p;
+  p.solver = kind;
+  p.tolerance = tolerance;
+  p.maxIt = max_it;
+  p.initial_guess = false;
+  p.islands = islands;
+  p.threads = threads;
+  return p;
+}
+
+double maxDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() ? (a - b).cwiseAbs().maxCoeff() : 1e300;
+}
+
+// The residual of `forces`, from W and d_free (not from the solver's d).
+double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces, double default_mu = 0.6) {
+  Eigen::VectorXd d;
+  multiply(p.W, forces, d);
+  d += p.d_free;
+  return naturalMapResidual(p, effectiveMu(p, default_mu), forces, d);
+}
+
+TEST(Islands, FindsTheGroupsOfInterleavedContacts) {
+  for (bool sparse : {false, true}) {
+    Generated g = generate(5, 6, Kinds::kMixed, 3);
+    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    const Islands islands = findIslands(p);
+    ASSERT_EQ(islands.count(), 5) << (sparse ? "block-sparse" : "dense");
+    for (std::size_t i = 0; i < p.contacts.size(); ++i)
+      for (std::size_t j = 0; j < p.contacts.size(); ++j)
+        EXPECT_EQ(islands.island_of[i] == islands.island_of[j], g.group_of[i] == g.group_of[j]);
+    int total = 0;
+    for (const auto& c : islands.contacts) {
+      EXPECT_TRUE(std::is_sorted(c.begin(), c.end()));
+      total += static_cast<int>(c.size());
+    }
+    EXPECT_EQ(total, 30);
+  }
+}
+
+TEST(Islands, OneGroupIsOneIsland) {
+  Generated g = generate(1, 12, Kinds::kFrictional, 4);
+  EXPECT_EQ(findIslands(g.problem).count(), 1);
+  EXPECT_EQ(findIslands(blockSparse(g.problem)).count(), 1);
+}
+
+TEST(Islands, IslandProblemKeepsTheRowsOfItsContacts) {
+  Generated g = generate(3, 4, Kinds::kMixed, 5);
+  const Islands islands = findIslands(g.problem);
+  const std::vector<int> off = g.problem.rowOffsets();
+  const Eigen::MatrixXd W = toDense(g.problem.W);
+  for (const Problem& p : {g.problem, blockSparse(g.problem)}) {
+    const Problem sub = islandProblem(p, off, islands.contacts[1]);
+    std::vector<int> rows;
+    for (int i : islands.contacts[1])
+      for (int r = off[i]; r < off[i + 1]; ++r) rows.push_back(r);
+    EXPECT_EQ(Eigen::MatrixXd(W(rows, rows)), toDense(sub.W));
+    EXPECT_EQ(Eigen::VectorXd(g.problem.d_free(rows)), sub.d_free);
+    EXPECT_EQ(validateProblem(sub), "");
+  }
+}
+
+// A fixed number of sweeps (tolerance out of reach): each island's Gauss-Seidel iterates
+// are the whole problem's, whose other islands contribute exact zeros.
+TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
+  for (bool sparse : {false, true}) {
+    for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
+      Generated g = generate(4, 5, kind == SolverKind::kPgs ? Kinds::kFrictionless : Kinds::kMixed, 6);
+      const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+      const SolveResult whole = solveProblem(p, paramsFor(kind, 1e-300, 37, false));
+      const SolveResult split = solveProblem(p, paramsFor(kind, 1e-300, 37, true));
+      EXPECT_EQ(whole.iterations, 37);
+      EXPECT_EQ(split.iterations, 37);
+      EXPECT_LE(maxDiff(whole.forces, split.forces), 1e-12) << solverName(kind) << (sparse ? " sparse" : " dense");
+      EXPECT_LE(maxDiff(whole.d, split.d), 1e-12);
+      EXPECT_NEAR(whole.residual, split.residual, 1e-12 * std::max(1.0, whole.residual));
+    }
+  }
+}
+
+// Unique solutions (W positive definite, no friction) at tight tolerance: every solver on
+// islands reaches the whole problem's solution, and the tolerance on the whole problem.
+TEST(Islands, UniqueSolutionsEqualTheWholeProblem) {
+  for (bool sparse : {false, true}) {
+    Generated g = generate(6, 5, Kinds::kFrictionless, 7, 0.05);
+    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    const SolveResult reference = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-12, 100000, false));
+    ASSERT_TRUE(reference.converged) << reference.message;
+    for (SolverKind kind : {SolverKind::kPgs, SolverKind::kLemke, SolverKind::kNewton, SolverKind::kApgd}) {
+      const SolveResult split = solveProblem(p, paramsFor(kind, 1e-12, 200000, true));
+      EXPECT_TRUE(split.converged) << solverName(kind) << ": " << split.message;
+      EXPECT_LE(split.residual, 1e-12) << solverName(kind);
+      EXPECT_LE(maxDiff(split.forces, reference.forces), 1e-10) << solverName(kind) << (sparse ? " sparse" : " dense");
+    }
+  }
+}
+
+// The per-island tolerances add up to the whole problem's: converged means the whole
+// residual meets the tolerance, also with islands whose d_free is zero.
+TEST(Islands, ConvergedMeansTheWholeResidualMeetsTheTolerance) {
+  Generated g = generate(5, 4, Kinds::kMixed, 8);
+  const std::vector<int> off = g.problem.rowOffsets();
+  for (int i = 0; i < static_cast<int>(g.problem.contacts.size()); ++i)
+    if (g.group_of[i] == 2)
+      for (int r = off[i]; r < off[i + 1]; ++r) g.problem.d_free[r] = 0.0;
+  for (double tol : {1e-3, 1e-6}) {
+    const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kNlgs, tol, 100000, true));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_LE(r.residual, tol);
+    EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
+  }
+}
+
+TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
+  for (bool sparse : {false, true}) {
+    Generated g = generate(9, 4, Kinds::kMixed, 9);
+    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kNewton, SolverKind::kApgd, SolverKind::kAuto}) {
+      const SolveResult one = solveProblem(p, paramsFor(kind, 1e-8, 100000, true, 1));
+      for (int threads : {2, 3, 8, 0}) {
+        const SolveResult many = solveProblem(p, paramsFor(kind, 1e-8, 100000, true, threads));
+        EXPECT_EQ(one.forces, many.forces) << solverName(kind) << " threads " << threads;
+        EXPECT_EQ(one.iterations, many.iterations);
+        EXPECT_EQ(one.status, many.status);
+      }
+    }
+  }
+}
+
+// Warm start and maxF with islands: a second solve from the first one's forces converges at
+// once; maxF drops contacts and re-solves per island as on the whole problem.
+TEST(Islands, WarmStartAndMaxFWork) {
+  Generated g = generate(4, 5, Kinds::kFrictionless, 10, 0.05);
+  SolverParams p = paramsFor(SolverKind::kPgs, 1e-10, 100000, true);
+  p.initial_guess = true;
+  ContactSolver solver(p);
+  const SolveResult first = solver.solve(g.problem);
+  ASSERT_TRUE(first.converged);
+  const SolveResult second = solver.solve(g.problem);
+  EXPECT_TRUE(second.converged);
+  EXPECT_LE(second.iterations, 1);
+  const double limit = 0.5 * first.forces.maxCoeff();
+  SolverParams capped = paramsFor(SolverKind::kLemke, 1e-12, 100000, true);
+  capped.maxF = limit;
+  SolverParams capped_whole = capped;
+  capped_whole.islands = false;
+  const SolveResult a = solveProblem(g.problem, capped), b = solveProblem(g.problem, capped_whole);
+  EXPECT_GE(a.resolves, 1);
+  EXPECT_EQ(a.states, b.states);
+  EXPECT_LE(maxDiff(a.forces, b.forces), 1e-10);
+}
+
+// ---- the symmetric active-set Newton ----------------------------------------------------
+
+TEST(SymmetricNewton, SolvesLcpsAndTheResidualOfItsForcesIsTheTolerance) {
+  for (int groups : {1, 3, 40}) {  // 40 × 5 rows > the dense limit: the sparse LDLT path
+    for (bool sparse : {false, true}) {
+      Generated g = generate(groups, 5, Kinds::kFrictionless, 11 + groups, 1e-3);
+      const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+      const SolveResult r = solveProblem(p, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
+      ASSERT_TRUE(r.converged) << r.message;
+      EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
+      EXPECT_LE(recomputedResidual(p, r.forces), 1e-10);
+      Eigen::VectorXd d;
+      multiply(p.W, r.forces, d);
+      d += p.d_free;
+      const double scale = p.d_free.norm();
+      EXPECT_GE(r.forces.minCoeff(), 0.0);
+      EXPECT_GE(d.minCoeff(), -1e-10 * scale);
+      EXPECT_LE(r.forces.cwiseProduct(d).cwiseAbs().maxCoeff(), 1e-10 * scale * (1.0 + r.forces.maxCoeff()));
+      const SolveResult lemke = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-12, 100000, false));
+      ASSERT_TRUE(lemke.converged);
+      EXPECT_LE(maxDiff(r.forces, lemke.forces), 1e-8);
+    }
+  }
+}
+
+TEST(SymmetricNewton, BilateralAndZeroFrictionRows) {
+  Generated g = generate(2, 6, Kinds::kMixed, 21, 1e-2);
+  for (Contact& c : g.problem.contacts) {
+    if (c.type == ContactType::kFrictional) c.mu = 0.0;  // compacted to one row
+  }
+  g.problem.contacts[1].type = ContactType::kBilateral;
+  g.problem.contacts[1].mu = -1.0;
+  const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
+  EXPECT_LE(recomputedResidual(g.problem, r.forces), 1e-10);
+}
+
+// Warm started from the previous solve's forces (its active set): one step or none.
+TEST(SymmetricNewton, WarmStartNeedsAtMostOneStep) {
+  Generated g = generate(3, 8, Kinds::kFrictionless, 31, 1e-3);
+  SolverParams p = paramsFor(SolverKind::kNewton, 1e-10, 1000, false);
+  p.initial_guess = true;
+  ContactSolver solver(p);
+  ASSERT_TRUE(solver.solve(g.problem).converged);
+  g.problem.d_free *= 1.01;  // the next step: same active set, slightly other values
+  const SolveResult next = solver.solve(g.problem);
+  ASSERT_TRUE(next.converged);
+  EXPECT_LE(next.iterations, 1);
+  EXPECT_LE(recomputedResidual(g.problem, next.forces), 1e-10);
+}
+
+// Not the symmetric path: friction, or a non-symmetric W; newton still solves them.
+TEST(SymmetricNewton, OtherProblemsTakeTheGeneralNewton) {
+  Generated g = generate(2, 5, Kinds::kFrictional, 41, 1e-2);
+  const SolveResult friction = solveProblem(g.problem, paramsFor(SolverKind::kNewton, 1e-9, 1000, false));
+  EXPECT_TRUE(friction.converged) << friction.message;
+  EXPECT_EQ(friction.message.find("active-set"), std::string::npos);
+  Generated h = generate(2, 5, Kinds::kFrictionless, 42, 0.5);
+  Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(h.problem.W);
+  W(0, 1) += 0.01;  // a P-matrix still, not symmetric
+  h.problem.W = W;
+  const SolveResult skew = solveProblem(h.problem, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
+  EXPECT_TRUE(skew.converged) << skew.message;
+  EXPECT_EQ(skew.message.find("active-set"), std::string::npos) << skew.message;
+  EXPECT_LE(recomputedResidual(h.problem, skew.forces), 1e-10);
+}
+
+// Singular W (more rows than degrees of freedom, no diagonal shift): the forces are not
+// unique; newton still reaches the tolerance (the general Newton takes over if needed).
+TEST(SymmetricNewton, RankDeficientWStillSolved) {
+  Generated g = generate(2, 10, Kinds::kFrictionless, 51, 0.0, 4);
+  // A solvable one: d_free = -W λ* + s with λ* >= 0, s >= 0, λ*ᵀ s = 0.
+  const Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(g.problem.W);
+  Eigen::VectorXd star = Eigen::VectorXd::Zero(W.rows()), slack = Eigen::VectorXd::Zero(W.rows());
+  for (int i = 0; i < W.rows(); ++i) (i % 3 == 0 ? star[i] : slack[i]) = 0.1 + 0.01 * i;
+  g.problem.d_free = -W * star + slack;
+  const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kNewton, 1e-8, 5000, false));
+  EXPECT_TRUE(r.converged) << r.message;
+  EXPECT_LE(recomputedResidual(g.problem, r.forces), 1e-8);
+}
+
+}  // namespace
+}  // namespace lcp_contact_solver
