@@ -170,6 +170,7 @@ Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, c
   out.name = problem.name;
   out.contacts.reserve(contacts.size());
   std::vector<int> rows;
+  rows.reserve(contacts.size() * 3);
   for (int i : contacts) {
     out.contacts.push_back(problem.contacts[i]);
     for (int r = offsets[i]; r < offsets[i + 1]; ++r) rows.push_back(r);
@@ -185,6 +186,17 @@ Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, c
   BlockSparseMatrix R;
   R.block_offset.assign(1, 0);
   R.row_start.assign(1, 0);
+  std::size_t blocks = 0, values = 0;  // sized once: no regrowth while copying
+  for (int i : contacts) {
+    blocks += W.row_start[i + 1] - W.row_start[i];
+    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b)
+      values += problem.contacts[i].rows * problem.contacts[W.block_col[b]].rows;
+  }
+  R.block_offset.reserve(contacts.size() + 1);
+  R.row_start.reserve(contacts.size() + 1);
+  R.block_col.reserve(blocks);
+  R.value_start.reserve(blocks);
+  R.values.reserve(values);
   for (int i : contacts) {
     R.block_offset.push_back(R.block_offset.back() + problem.contacts[i].rows);
     for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {

@@ -147,10 +147,27 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
   if (dense != nullptr || n <= kDenseMaxRows) {
-    Eigen::MatrixXd W = dense != nullptr ? *dense : toDense(p.W);
+    Eigen::MatrixXd W;
+    if (dense != nullptr) {
+      W = *dense;
+    } else {  // scatter the blocks (toDense's temporaries cost more than the island's solve)
+      const auto& B = std::get<BlockSparseMatrix>(p.W);
+      W.setZero(n, n);
+      for (int bi = 0; bi < B.blockCount(); ++bi)
+        for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
+          const int bj = B.block_col[s];
+          const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
+          const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
+          const double* v = B.values.data() + B.value_start[s];
+          for (int r = 0; r < rows; ++r)
+            for (int c = 0; c < cols; ++c) W(r0 + r, c0 + c) = v[r * cols + c];
+        }
+    }
     W.diagonal().array() += ctx.regularization;
-    const double scale = n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0;
-    if ((W - W.transpose()).cwiseAbs().maxCoeff() > kSymmetryTolerance * scale) return nullptr;
+    const double limit = kSymmetryTolerance * (n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0);
+    for (int c = 0; c < n; ++c)
+      for (int r = c + 1; r < n; ++r)
+        if (std::abs(W(r, c) - W(c, r)) > limit) return nullptr;
     return std::make_unique<DenseReduced>(std::move(W));
   }
   const auto& B = std::get<BlockSparseMatrix>(p.W);

@@ -207,43 +207,50 @@ bool allFinite(const double* v, std::size_t n) {
 }
 
 std::string validateContacts(const Problem& problem) {
-  std::unordered_set<std::int64_t> ids;  // the warm start is keyed by id: ids must be unique
+  // The warm start is keyed by id: ids must be unique. One sorted copy (no per-contact
+  // allocation); the set that names the repeat runs only when there is one.
+  std::vector<std::int64_t> sorted(problem.contacts.size());
+  for (std::size_t i = 0; i < sorted.size(); ++i) sorted[i] = problem.contacts[i].id;
+  std::sort(sorted.begin(), sorted.end());
+  const bool repeats = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+  std::unordered_set<std::int64_t> ids;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const Contact& c = problem.contacts[i];
-    const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
-    if (!ids.insert(c.id).second) return name + " repeats the id of an earlier contact";
+    // Built only for a message (a string per contact was most of a small solve's cost).
+    const auto name = [&] { return "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")"; };
+    if (repeats && !ids.insert(c.id).second) return name() + " repeats the id of an earlier contact";
     switch (c.type) {
       case ContactType::kFrictional:
-        if (c.rows != 3) return name + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";
+        if (c.rows != 3) return name() + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";
         break;
       case ContactType::kFrictionless:
-        if (c.rows != 1) return name + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
+        if (c.rows != 1) return name() + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
         break;
       case ContactType::kTorsional:
       case ContactType::kRolling:
         if (c.rows != rowsForType(c.type))
-          return name + " is " + (c.type == ContactType::kTorsional ? "torsional" : "rolling") + " but has " +
+          return name() + " is " + (c.type == ContactType::kTorsional ? "torsional" : "rolling") + " but has " +
                  std::to_string(c.rows) + " rows (" + std::to_string(rowsForType(c.type)) + " expected)";
         break;
       case ContactType::kBilateral:
-        if (c.rows < 1 || c.rows > 6) return name + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
+        if (c.rows < 1 || c.rows > 6) return name() + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
         break;
       default:
-        return name + " has an unknown type " + std::to_string(static_cast<int>(c.type));
+        return name() + " has an unknown type " + std::to_string(static_cast<int>(c.type));
     }
-    if (std::isnan(c.mu) || std::isinf(c.mu)) return name + " has a non-finite mu";
+    if (std::isnan(c.mu) || std::isinf(c.mu)) return name() + " has a non-finite mu";
     // Negative means "use the default": only exactly the sentinel range is allowed, so a
     // typo like -0.3 is not silently replaced by the default.
-    if (c.mu < 0.0 && c.mu != -1.0) return name + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
+    if (c.mu < 0.0 && c.mu != -1.0) return name() + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
     if (!std::isfinite(c.mu_torsional) || c.mu_torsional < 0.0)
-      return name + " has a negative or non-finite torsional friction coefficient";
+      return name() + " has a negative or non-finite torsional friction coefficient";
     if (!std::isfinite(c.mu_rolling) || c.mu_rolling < 0.0)
-      return name + " has a negative or non-finite rolling friction coefficient";
-    if (!std::isfinite(c.gap)) return name + " has a non-finite gap";
+      return name() + " has a negative or non-finite rolling friction coefficient";
+    if (!std::isfinite(c.gap)) return name() + " has a non-finite gap";
     if (!std::isfinite(c.erp) || (c.erp != Contact::kUseDefault && (c.erp < 0.0 || c.erp > 1.0)))
-      return name + " has erp " + std::to_string(c.erp) + " outside [0, 1] (use -1 for the default)";
+      return name() + " has erp " + std::to_string(c.erp) + " outside [0, 1] (use -1 for the default)";
     if (!std::isfinite(c.softness) || (c.softness != Contact::kUseDefault && c.softness < 0.0))
-      return name + " has a negative softness " + std::to_string(c.softness) + " (use -1 for the default)";
+      return name() + " has a negative softness " + std::to_string(c.softness) + " (use -1 for the default)";
   }
   return "";
 }

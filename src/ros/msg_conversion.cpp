@@ -13,7 +13,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
-#include <set>
+#include <unordered_set>
 #include <utility>
 
 namespace lcp_contact_solver_ros {
@@ -136,22 +136,27 @@ std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Proble
            std::to_string(limit);
   problem->contacts.resize(msg.contacts.size());
   frames->resize(msg.contacts.size());
-  std::set<std::int64_t> ids;
+  // Repeated ids: one sorted copy finds whether there is any; only then does a set name
+  // the first contact that repeats one (no tree node per contact on the normal path).
+  std::vector<std::int64_t> sorted(msg.contacts.size());
+  for (std::size_t i = 0; i < sorted.size(); ++i) sorted[i] = msg.contacts[i].id;
+  std::sort(sorted.begin(), sorted.end());
+  const bool repeats = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+  std::unordered_set<std::int64_t> ids;
   std::int64_t rows = 0;
   for (std::size_t i = 0; i < msg.contacts.size(); ++i) {
     const lcs::ContactPoint& c = msg.contacts[i];
     std::string error = toCoreContact(c, &problem->contacts[i]);
     if (error.empty()) error = toContactFrame(c, &(*frames)[i]);
-    if (error.empty() && !ids.insert(c.id).second) error = "repeats an id used by an earlier contact";
+    if (error.empty() && repeats && !ids.insert(c.id).second) error = "repeats an id used by an earlier contact";
     if (!error.empty()) return contactName(i, c.id) + " " + error;
     rows += problem->contacts[i].rows;
   }
   if (rows > limit)
     return "the contacts have " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(limit);
   problem->d_free.resize(rows);
-  int row = 0;
-  for (const lcs::ContactPoint& c : msg.contacts)
-    for (double v : c.d_free) problem->d_free[row++] = v;
+  double* out = problem->d_free.data();
+  for (const lcs::ContactPoint& c : msg.contacts) out = std::copy(c.d_free.begin(), c.d_free.end(), out);
   return "";
 }
 
@@ -176,35 +181,44 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
   for (std::size_t i = 0; i < nb; ++i) sizes[i] = offsets[i + 1] - offsets[i];
   // Where each block's values start in block_data, in message order.
   std::vector<std::size_t> start(blocks + 1, 0);
-  std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
   for (std::size_t k = 0; k < blocks; ++k) {
     const std::uint32_t i = msg.block_rows[k], j = msg.block_cols[k];
     if (i >= nb || j >= nb)
       return "block " + std::to_string(k) + " (" + std::to_string(i) + ", " + std::to_string(j) +
              ") names a contact beyond the " + std::to_string(nb) + " contacts";
-    if (!seen.insert({i, j}).second)
-      return "block (" + std::to_string(i) + ", " + std::to_string(j) + ") is given twice";
     start[k + 1] = start[k] + static_cast<std::size_t>(sizes[i]) * sizes[j];
   }
-  if (msg.block_data.size() != start[blocks])
-    return "block-sparse compliance has " + std::to_string(msg.block_data.size()) +
-           " block_data values, its blocks need " + std::to_string(start[blocks]);
+  // Blocks in (row, column) order; a repeated block is two equal neighbours there.
   std::vector<std::size_t> order(blocks);
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&msg](std::size_t a, std::size_t b) {
     return std::make_pair(msg.block_rows[a], msg.block_cols[a]) < std::make_pair(msg.block_rows[b], msg.block_cols[b]);
   });
-  lcs::BlockSparseMatrix sparse = lcs::BlockSparseMatrix::withBlockSizes(sizes);
-  std::size_t next = 0;
-  for (std::size_t i = 0; i < nb; ++i) {
-    sparse.beginRow();
-    for (; next < blocks && msg.block_rows[order[next]] == i; ++next) {
-      const std::size_t k = order[next];
-      const int j = static_cast<int>(msg.block_cols[k]);
-      using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-      sparse.addBlock(j, Eigen::Map<const RowMajor>(msg.block_data.data() + start[k], sizes[i], sizes[j]));
-    }
+  for (std::size_t k = 1; k < blocks; ++k) {
+    const std::size_t a = order[k - 1], b = order[k];
+    if (msg.block_rows[a] == msg.block_rows[b] && msg.block_cols[a] == msg.block_cols[b])
+      return "block (" + std::to_string(msg.block_rows[b]) + ", " + std::to_string(msg.block_cols[b]) + ") is given twice";
   }
+  if (msg.block_data.size() != start[blocks])
+    return "block-sparse compliance has " + std::to_string(msg.block_data.size()) +
+           " block_data values, its blocks need " + std::to_string(start[blocks]);
+  // The CSR arrays written in place: one copy of each block's values, no per-value append.
+  lcs::BlockSparseMatrix sparse = lcs::BlockSparseMatrix::withBlockSizes(sizes);
+  sparse.row_start.assign(nb + 1, 0);
+  sparse.block_col.resize(blocks);
+  sparse.value_start.resize(blocks);
+  sparse.values.resize(start[blocks]);
+  std::size_t value = 0;
+  for (std::size_t n = 0; n < blocks; ++n) {
+    const std::size_t k = order[n];
+    const std::size_t size = start[k + 1] - start[k];
+    ++sparse.row_start[msg.block_rows[k] + 1];
+    sparse.block_col[n] = static_cast<int>(msg.block_cols[k]);
+    sparse.value_start[n] = static_cast<int>(value);
+    std::copy(msg.block_data.begin() + start[k], msg.block_data.begin() + start[k] + size, sparse.values.begin() + value);
+    value += size;
+  }
+  for (std::size_t i = 0; i < nb; ++i) sparse.row_start[i + 1] += sparse.row_start[i];
   *W = std::move(sparse);
   return "";
 }
