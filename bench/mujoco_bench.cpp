@@ -5,7 +5,7 @@
 //   mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]
 //                [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]
 //                [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]
-//                [--threads N] [--islands on|off]
+//                [--threads N] [--islands on|off] [--mujoco-tolerance T]
 //
 // Default models: MuJoCo's 22_humanoids and humanoid100 (libmujoco-samples), pyramidal cone.
 // Each model runs a reference trajectory with MuJoCo's own default solver (Newton); the steps
@@ -20,6 +20,9 @@
 //     efc_force has residual ≤ R (doubling, then bisection), time = mj_fwdConstraint at k.
 //     MuJoCo's PGS also needs efc_AR (mj_projectConstraint), timed apart ("mujoco_AR"); CG
 //     and Newton do not. Ours is given W = efc_AR, so its time excludes that build too.
+//   - with --mujoco-tolerance T > 0, also MuJoCo's solver S at its own stopping rule
+//     (opt.tolerance = T, opt.iterations as the model sets it): row "mujoco_S_tol", its
+//     iterations MuJoCo's solver_iter.
 // Times are the minimum of --repeat runs. CSV: model,step,time,contacts,rows,solver,
 // iterations,residual,reached,seconds. A summary table (median per step) goes to stdout.
 #include "lcp_contact_solver/core/contact_solver.h"
@@ -54,6 +57,7 @@ struct Options {
   std::string csv;
   int threads = 0;      // SolverParams::threads of ours (0 = the core count)
   bool islands = true;  // SolverParams::islands of ours
+  double mujoco_tolerance = 0.0;  // > 0: MuJoCo's solvers also at their own stopping rule
 };
 
 struct Row {
@@ -81,14 +85,14 @@ double median(std::vector<double> v) {
 // MuJoCo's solver `solver` with `iterations` on a copy of `snapshot`: its solve time and the
 // residual of its forces on `mp`.
 std::pair<double, double> runMujoco(const MujocoWorld& snapshot, MujocoWorld& scratch, const MujocoProblem& mp,
-                                    int solver, int iterations, int repeat) {
+                                    int solver, int iterations, int repeat, double tolerance = 0.0) {
   double best = 1e300, residual = 0.0;
   for (int r = 0; r < repeat; ++r) {
     scratch.copyDataFrom(snapshot);
     mjModel* m = scratch.model();
     m->opt.solver = solver;
     m->opt.iterations = iterations;
-    m->opt.tolerance = 0.0;
+    m->opt.tolerance = tolerance;
     double seconds = 0.0;
     forwardToConstraints(m, scratch.data(), true, &seconds);
     best = std::min(best, seconds);
@@ -121,6 +125,7 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
     std::cerr << "mujoco_bench: " << error << "\n";
     std::exit(2);
   }
+  const int model_iterations = world->model()->opt.iterations;  // MuJoCo's own cap, before runMujoco edits it
   auto scratch = world->clone();
   auto snapshot = world->clone();
   std::string name = path.substr(path.find_last_of('/') + 1);
@@ -208,6 +213,17 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
           r.residual = residual;
           r.reached = residual <= o.target;
           rows->push_back(r);
+          if (o.mujoco_tolerance > 0.0) {  // MuJoCo at its own stopping rule
+            Row t = base;
+            t.solver = std::string("mujoco_") + mujocoSolverName(s) + "_tol";
+            const auto [own_seconds, own_residual] =
+                runMujoco(*snapshot, *scratch, mp, s, model_iterations, o.repeat, o.mujoco_tolerance);
+            t.seconds = own_seconds;
+            t.residual = own_residual;
+            t.iterations = scratch->data()->solver_iter;
+            t.reached = own_residual <= o.target;
+            rows->push_back(t);
+          }
         }
         std::fprintf(stderr, "%s step %d: %d contacts, %d rows\n", name.c_str(), step, base.contacts, base.rows);
       }
@@ -258,11 +274,12 @@ int main(int argc, char** argv) {
     else if (a == "--csv") o.csv = value();
     else if (a == "--threads") o.threads = std::max(0, std::atoi(value().c_str()));
     else if (a == "--islands") o.islands = value() != "off";
+    else if (a == "--mujoco-tolerance") o.mujoco_tolerance = std::atof(value().c_str());
     else {
       std::cerr << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
                    "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
                    "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n"
-                   "                    [--threads N] [--islands on|off]\n";
+                   "                    [--threads N] [--islands on|off] [--mujoco-tolerance T]\n";
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }

@@ -165,7 +165,12 @@ Islands findIslands(const Problem& problem) {
   return out;
 }
 
-Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts) {
+namespace {
+
+// islandProblem with each contact's island and position in it given (`island_of`,
+// `position`), so that building every island costs O(stored blocks) in all.
+Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts,
+                    const std::vector<int>& island_of, const std::vector<int>& position) {
   Problem out;
   out.name = problem.name;
   out.contacts.reserve(contacts.size());
@@ -181,8 +186,7 @@ Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, c
     return out;
   }
   const auto& W = std::get<BlockSparseMatrix>(problem.W);
-  std::vector<int> local(problem.contacts.size(), -1);
-  for (std::size_t k = 0; k < contacts.size(); ++k) local[contacts[k]] = static_cast<int>(k);
+  const int island = contacts.empty() ? -1 : island_of[contacts.front()];
   BlockSparseMatrix R;
   R.block_offset.assign(1, 0);
   R.row_start.assign(1, 0);
@@ -194,24 +198,42 @@ Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, c
   }
   R.block_offset.reserve(contacts.size() + 1);
   R.row_start.reserve(contacts.size() + 1);
-  R.block_col.reserve(blocks);
-  R.value_start.reserve(blocks);
-  R.values.reserve(values);
+  R.block_col.resize(blocks);
+  R.value_start.resize(blocks);
+  R.values.resize(values);
+  std::size_t nb = 0, nv = 0;
   for (int i : contacts) {
-    R.block_offset.push_back(R.block_offset.back() + problem.contacts[i].rows);
+    const int rows_i = problem.contacts[i].rows;
+    R.block_offset.push_back(R.block_offset.back() + rows_i);
     for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
-      // Blocks to other islands are zero (findIslands), so nothing is lost.
-      const int j = local[W.block_col[b]];
-      if (j < 0) continue;
-      const int size = problem.contacts[i].rows * problem.contacts[W.block_col[b]].rows;
-      R.block_col.push_back(j);
-      R.value_start.push_back(static_cast<int>(R.values.size()));
-      R.values.insert(R.values.end(), W.values.begin() + W.value_start[b], W.values.begin() + W.value_start[b] + size);
+      // Blocks to other islands are zero (findIslands) and left out.
+      if (island_of[W.block_col[b]] != island) continue;
+      const int j = position[W.block_col[b]];
+      const int size = rows_i * problem.contacts[W.block_col[b]].rows;
+      R.block_col[nb] = j;
+      R.value_start[nb++] = static_cast<int>(nv);
+      const double* v = W.values.data() + W.value_start[b];
+      for (int k = 0; k < size; ++k) R.values[nv + k] = v[k];
+      nv += size;
     }
-    R.row_start.push_back(static_cast<int>(R.block_col.size()));
+    R.row_start.push_back(static_cast<int>(nb));
   }
+  R.block_col.resize(nb);
+  R.value_start.resize(nb);
+  R.values.resize(nv);
   out.W = std::move(R);
   return out;
+}
+
+}  // namespace
+
+Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts) {
+  std::vector<int> island_of(problem.contacts.size(), 1), position(problem.contacts.size(), -1);
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    island_of[contacts[k]] = 0;
+    position[contacts[k]] = static_cast<int>(k);
+  }
+  return buildIsland(problem, offsets, contacts, island_of, position);
 }
 
 IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
@@ -224,10 +246,13 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
   // (k islands): at most √2 tighter than the island's own relative tolerance, and an island
   // whose d_free is tiny (or zero) is not asked for a relative accuracy it cannot reach.
   std::vector<double> norms(islands_.size());
+  std::vector<int> position(problem.contacts.size());
+  for (const auto& list : islands.contacts)
+    for (std::size_t k = 0; k < list.size(); ++k) position[list[k]] = static_cast<int>(k);
   for (std::size_t k = 0; k < islands_.size(); ++k) {
     Island& isl = islands_[k];
     isl.contacts = std::move(islands.contacts[k]);
-    isl.problem = islandProblem(problem, ctx.offsets, isl.contacts);
+    isl.problem = buildIsland(problem, ctx.offsets, isl.contacts, islands.island_of, position);
     norms[k] = isl.problem.d_free.norm();
     for (int i : isl.contacts)
       for (int r = ctx.offsets[i]; r < ctx.offsets[i + 1]; ++r) isl.rows.push_back(r);

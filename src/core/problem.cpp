@@ -97,6 +97,17 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
   for (int i = 0; i < blockCount(); ++i) {
     const int row0 = block_offset[i];
     const int ri = block_offset[i + 1] - row0;
+    if (ri == 1) {  // a one-row contact (frictionless, limit, pyramid edge): one dot product
+      double sum = 0.0;
+      for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+        const int col0 = block_offset[block_col[k]];
+        const int cj = block_offset[block_col[k] + 1] - col0;
+        const double* v = values.data() + value_start[k];
+        for (int c = 0; c < cj; ++c) sum += v[c] * x[col0 + c];
+      }
+      y[row0] = sum;
+      continue;
+    }
     for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
       const int j = block_col[k];
       const int col0 = block_offset[j];
