@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -45,33 +46,11 @@ bool pyramidModel(const SolverParams& params) {
   return params.friction_model != FrictionModel::kCoulombDisc;
 }
 
-// auto: a pyramid makes friction an LCP, solved by (boxed) pgs; no friction: pgs. The disc,
-// from the work-precision study (docs/BENCHMARKS.md: cold solves of the fc3d set and of the
-// scene problems): nlgs is the fastest down to a residual of 1e-4; from 1e-5 on, nlgs stalls
-// on rank-deficient stacks (BoxesStack, OneObject, box pyramids) where newton reaches 1e-8
-// in milliseconds on up to a few hundred rows, while on larger problems newton's
-// factorizations cost more than apgd's matrix-vector products.
-constexpr double kAutoTightTolerance = 1e-4;  // tolerance below this: newton or apgd
-constexpr int kAutoNewtonMaxRows = 200;       // newton up to this many rows, apgd above
-
 // Torsional or rolling contacts: only nlgs has their local step.
 bool hasExtendedFriction(const Problem& problem) {
   for (const Contact& c : problem.contacts)
     if (c.type == ContactType::kTorsional || c.type == ContactType::kRolling) return true;
   return false;
-}
-
-SolverKind resolveKind(SolverKind kind, const SolveContext& ctx) {
-  if (kind != SolverKind::kAuto) return kind;
-  if (hasExtendedFriction(*ctx.problem)) return SolverKind::kNlgs;
-  if (!ctx.hasFriction() || pyramidModel(*ctx.params)) return SolverKind::kPgs;
-  // The unbuilt solve (body form, build_lcp = false) is Gauss-Seidel, as in SOFA: nlgs at
-  // any tolerance (newton and apgd would need the assembled W).
-  if (ctx.problem->bodies) return SolverKind::kNlgs;
-  const SolverParams& p = *ctx.params;
-  if (p.stopping_rule == StoppingRule::kResidual && p.tolerance < kAutoTightTolerance)
-    return ctx.problem->rowCount() <= kAutoNewtonMaxRows ? SolverKind::kNewton : SolverKind::kApgd;
-  return SolverKind::kNlgs;
 }
 
 // Lemke ends when z0 leaves the basis: exact in exact arithmetic, but on an ill-conditioned
@@ -91,6 +70,9 @@ KernelReport honestLemke(KernelReport report, const SolverParams& params) {
   return report;
 }
 
+// auto (below): the portfolio of the other kernels.
+KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda);
+
 KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const bool pyramid = pyramidModel(*ctx.params) && ctx.hasFriction();
   switch (kind) {
@@ -100,8 +82,9 @@ KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd
       return pyramid ? runPyramidLemke(ctx, lambda) : honestLemke(runLemke(ctx, lambda), *ctx.params);
     case SolverKind::kApgd: return runApgd(ctx, lambda);
     case SolverKind::kNewton: return runNewton(ctx, lambda);
-    case SolverKind::kNlgs:
-    case SolverKind::kAuto: break;
+    case SolverKind::kProx: return runProxNewton(ctx, lambda);
+    case SolverKind::kAuto: return runPortfolio(ctx, lambda);
+    case SolverKind::kNlgs: break;
   }
   return runNonlinearGaussSeidel(ctx, lambda);
 }
@@ -166,6 +149,262 @@ Problem assembledProblem(const Problem& problem) {
 bool failedToRun(SolveStatus status) {
   return status == SolveStatus::kZeroDiagonal || status == SolveStatus::kNotApplicable ||
          status == SolveStatus::kRayTermination || status == SolveStatus::kNumericalFailure;
+}
+
+// ---- auto: the portfolio ----------------------------------------------------------------
+//
+// auto predicts an order of members from features that do not depend on any benchmark set:
+// the friction law and contact types (what each kernel can solve), the tolerance (Gauss-
+// Seidel and APGD converge linearly or sublinearly, Newton superlinearly), the size (a
+// Newton step factorizes, a sweep or an APGD iteration is one pass over W), the storage
+// (body form: Gauss-Seidel runs unbuilt) and two estimates of how hard W is for Gauss-
+// Seidel: the normal coupling (mean over contacts of Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is
+// diagonally dominant on the normal rows and Gauss-Seidel contracts fast) and, when the body
+// form is known, whether the active rows exceed the bodies' 6 DoF each (W singular).
+// Then each member runs in slices of iterations from the best iterate so far: a slice that
+// ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
+// first-order methods) hands over to the next member; a member that fails (not_applicable,
+// zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
+// progresses continues with a doubled slice. Members rotate until the tolerance, maxIt
+// (summed over every slice) or time_budget (a slice gets at most half the remaining time
+// while another member is left) ends the solve.
+
+constexpr double kAutoTightTolerance = 1e-4;   // below: a superlinear method pays off
+constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
+constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
+constexpr int kAutoNewtonRowsTight = 1000;
+constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up to this size
+constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
+constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+
+struct AutoFeatures {
+  int rows = 0;
+  double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
+  bool rank_deficient = false;  // active rows > 6 × bodies (body form only)
+  bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
+};
+
+double normalCoupling(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  const int nc = static_cast<int>(p.contacts.size());
+  std::vector<double> off_sum(nc, 0.0);
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {
+    for (int j = 0; j < nc; ++j) {
+      if (ctx.ignored[j]) continue;
+      for (int i = 0; i < nc; ++i)
+        if (i != j && !ctx.ignored[i]) off_sum[i] += std::abs((*dense)(ctx.offsets[i], ctx.offsets[j]));
+    }
+  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
+    for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
+      if (ctx.ignored[i]) continue;
+      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
+        const int j = sparse->block_col[b];
+        if (j != i && !ctx.ignored[j]) off_sum[i] += std::abs(sparse->values[sparse->value_start[b]]);
+      }
+    }
+  }
+  double sum = 0.0;
+  int active = 0;
+  for (int i = 0; i < nc; ++i) {
+    if (ctx.ignored[i]) continue;
+    const double w = std::get_if<Eigen::MatrixXd>(&p.W) ? std::get<Eigen::MatrixXd>(p.W)(ctx.offsets[i], ctx.offsets[i])
+                                                         : diagonalBlock(p.W, ctx.offsets[i], 1)(0, 0);
+    if (w <= 0.0) continue;  // Gauss-Seidel cannot use this row at all (zero_diagonal)
+    sum += off_sum[i] / w;
+    ++active;
+  }
+  return active > 0 ? sum / active : 0.0;
+}
+
+AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
+  AutoFeatures f;
+  f.rows = ctx.problem->rowCount();
+  f.body_form = static_cast<bool>(ctx.problem->bodies);
+  if (!f.body_form) f.coupling = normalCoupling(ctx);
+  if (body_dof > 0) {
+    int active_rows = 0;
+    for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i)
+      if (!ctx.ignored[i]) active_rows += ctx.problem->contacts[i].rows;
+    f.rank_deficient = active_rows > body_dof;
+  }
+  return f;
+}
+
+std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f) {
+  using K = SolverKind;
+  const SolverParams& p = *ctx.params;
+  if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
+  if (!ctx.hasFriction()) return {K::kPgs, K::kNewton, K::kApgd};
+  if (pyramidModel(p)) return {K::kPgs, K::kLemke};
+  if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
+  const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
+  if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
+    if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  }
+  // Tight: Gauss-Seidel only where it contracts fast whatever the size.
+  if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
+  const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
+  if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
+  return {K::kApgd, K::kProx, K::kNewton, K::kNlgs};
+}
+
+// Iterations of a member's first slice, and the residual factor a slice must reach to keep
+// the member running.
+int firstSlice(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::kNewton: return 300;  // 20 warm-up sweeps, Newton steps and two nlgs bursts
+    case SolverKind::kProx: return 300;
+    case SolverKind::kApgd: return 200;
+    case SolverKind::kLemke: return 1 << 30;  // pivoting is not sliced
+    default: return 100;
+  }
+}
+double sliceFactor(SolverKind kind) {
+  return kind == SolverKind::kNewton || kind == SolverKind::kProx ? 0.1 : 0.5;
+}
+
+// λ onto the contacts' feasible sets (Coulomb cone, λ_n >= 0); other rows unchanged.
+void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    const Contact& c = ctx.problem->contacts[i];
+    double* l = x.data() + ctx.offsets[i];
+    if (c.type == ContactType::kFrictionless) {
+      l[0] = std::max(0.0, l[0]);
+    } else if (c.type == ContactType::kFrictional && c.rows == 3) {
+      projectOntoCone(ctx.mu[i], l);
+    }
+  }
+}
+
+KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const SolverParams& params = *ctx.params;
+  std::vector<SolverKind> members = autoPlan(ctx, autoFeatures(ctx, ctx.body_dof));
+  Problem assembled;  // the body form's W, assembled only if a member needs it
+  std::vector<int> slice(members.size());
+  for (std::size_t m = 0; m < members.size(); ++m) slice[m] = firstSlice(members[m]);
+  std::vector<double> rate(members.size(), 0.0);  // log residual decrease per second, last slice
+  std::vector<bool> tried(members.size(), false);
+  std::vector<int> retry_origin(members.size(), 0);  // 0 not needed, 1 due, 2 done
+  const Eigen::VectorXd origin = lambda;
+
+  KernelReport report;
+  std::vector<std::pair<std::string, double>>* stages = &report.stages;
+  Eigen::VectorXd best = lambda;
+  // The measure members are compared by: the disc residual, or for a pyramid the kernels'
+  // own pyramid residual (the disc's is nonzero there by design).
+  const bool pyramid = pyramidModel(params) && ctx.hasFriction();
+  const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
+  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : ctx.residual(lambda);
+  if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
+  double best_error = best_residual;
+  FrictionModel best_model = FrictionModel::kCoulombDisc;
+  SolveStatus last_failure = SolveStatus::kMaxIterations;
+  std::string last_message;
+  int used = 0;
+  std::size_t m = 0;
+  while (!members.empty()) {
+    const SolverKind kind = members[m];
+    SolverParams member_params = params;
+    member_params.maxIt = std::min(slice[m], params.maxIt - used);
+    SolveContext member = ctx;
+    member.params = &member_params;
+    const Clock::time_point t0 = Clock::now();
+    if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
+      member.deadline = t0 + (ctx.deadline - t0) / 2;
+    }
+    if (ctx.problem->bodies && kind != SolverKind::kNlgs && kind != SolverKind::kPgs) {
+      if (assembled.contacts.empty() && !ctx.problem->contacts.empty()) assembled = assembledProblem(*ctx.problem);
+      member.problem = &assembled;
+    }
+    // From the best iterate; a member that could not move from it at all runs once more
+    // from the portfolio's own start (the warm start), projected onto the feasible sets.
+    const bool from_origin = retry_origin[m] == 1;
+    if (from_origin) retry_origin[m] = 2;
+    Eigen::VectorXd x = from_origin ? origin : best;
+    if (from_origin) projectFeasible(ctx, x);
+    const KernelReport r = runKernel(kind, member, x);
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (stages->empty() || stages->back().first != solverName(kind)) stages->emplace_back(solverName(kind), 0.0);
+    stages->back().second += seconds;
+    report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    used += r.iterations;
+    const double start_residual = best_residual;
+    double residual = !x.allFinite() ? std::numeric_limits<double>::infinity() : pyramid ? r.solver_error : ctx.residual(x);
+    if (!std::isfinite(residual)) residual = std::numeric_limits<double>::infinity();
+    const bool converged = r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
+    if (residual < best_residual || converged) {
+      best_residual = residual;
+      best = x;
+      best_error = r.solver_error;
+      best_model = r.friction_model;
+    }
+    if (converged || (by_residual && best_residual <= params.tolerance)) {
+      report.status = SolveStatus::kConverged;
+      break;
+    }
+    if (ctx.deadlinePassed()) {
+      report.status = SolveStatus::kTimeBudget;
+      report.message = "auto: time budget (" + std::to_string(params.time_budget) + " s) ran out; best iterate returned";
+      break;
+    }
+    if (used >= params.maxIt) {
+      report.status = SolveStatus::kMaxIterations;
+      report.message = "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
+      break;
+    }
+    if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
+      last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
+      last_message = std::string(solverName(kind)) + ": " + r.message;
+      members.erase(members.begin() + static_cast<long>(m));
+      slice.erase(slice.begin() + static_cast<long>(m));
+      rate.erase(rate.begin() + static_cast<long>(m));
+      tried.erase(tried.begin() + static_cast<long>(m));
+      retry_origin.erase(retry_origin.begin() + static_cast<long>(m));
+      if (m >= members.size()) m = 0;
+      continue;
+    }
+    // Slice used up (iterations or its share of the time): keep the member while it
+    // progresses, otherwise the next one continues from the best iterate.
+    const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(kind) * start_residual;
+    rate[m] = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
+    tried[m] = true;
+    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin) retry_origin[m] = 1;
+    if (progressing) {
+      slice[m] = std::min(2 * slice[m], 1 << 28);
+      continue;
+    }
+    // Stalled: the next member not tried yet, else the one that lowered the residual
+    // fastest for its time (a stalled member keeps its slice; the chosen one doubles it).
+    if (members.size() > 1) {
+      std::size_t next = members.size();
+      for (std::size_t k = 1; k < members.size() && next == members.size(); ++k)
+        if (!tried[(m + k) % members.size()]) next = (m + k) % members.size();
+      if (next == members.size()) {
+        next = (m + 1) % members.size();
+        for (std::size_t k = 0; k < members.size(); ++k)
+          if (rate[k] > rate[next]) next = k;
+        slice[next] = std::min(2 * slice[next], 1 << 28);
+      }
+      m = next;
+    }
+  }
+  if (members.empty()) {
+    report.status = last_failure;
+    report.message = "auto: every member failed; last " + last_message;
+  }
+  lambda = best;
+  report.iterations = used;
+  report.solver_error = std::isfinite(best_error) ? best_error : best_residual;
+  report.friction_model = best_model;
+  return report;
+}
+
+std::string autoPath(const std::vector<std::pair<std::string, double>>& stages) {
+  if (stages.empty()) return "auto";
+  std::string path = "auto:";
+  for (std::size_t i = 0; i < stages.size(); ++i) path += (i ? "->" : "") + stages[i].first;
+  return path;
 }
 
 }  // namespace
@@ -303,9 +542,9 @@ SolveResult ContactSolver::solve(const Problem& input) {
                                std::chrono::duration<double>(std::min(params_.time_budget, 1e7)));
   }
 
-  const SolverKind kind = resolveKind(params_.solver, ctx);
+  const SolverKind kind = params_.solver;
   result.solver = solverName(kind);
-  if (kind != SolverKind::kNlgs && hasExtendedFriction(problem)) {
+  if (kind != SolverKind::kNlgs && kind != SolverKind::kAuto && hasExtendedFriction(problem)) {
     result.status = SolveStatus::kNotApplicable;
     result.message = std::string(solverName(kind)) +
                      " does not solve torsional or rolling friction (4- and 6-row contacts); use nlgs or auto";
@@ -315,6 +554,8 @@ SolveResult ContactSolver::solve(const Problem& input) {
     result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
     return result;
   }
+  // auto's rank-deficiency estimate: rows against the bodies' degrees of freedom.
+  ctx.body_dof = stated.bodies ? 6 * stated.bodies->bodyCount() : 0;
   // Independent islands of W are solved apart (islands.h), built once for every maxF pass.
   std::unique_ptr<IslandSolver> islands;
   // Newton on the disc stays whole: its globalisation (nlgs warm-up and bursts, ε from the
@@ -342,11 +583,16 @@ SolveResult ContactSolver::solve(const Problem& input) {
     report.iterations += pass.iterations;
     report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
     report.friction_model = pass.friction_model;
+    for (const auto& stage : pass.stages) {  // auto: consecutive slices of one member are one stage
+      if (!result.stages.empty() && result.stages.back().first == stage.first) result.stages.back().second += stage.second;
+      else result.stages.push_back(stage);
+    }
     if (failedToRun(pass.status) || pass.status == SolveStatus::kTimeBudget || params_.maxF <= 0.0) break;
     if (dropContactsAboveMaxF(ctx, lambda, params_.maxF) == 0) break;
     ++result.resolves;
   }
   zeroInactiveRows(ctx, lambda);
+  if (kind == SolverKind::kAuto) result.solver = autoPath(result.stages);
 
   if (!lambda.allFinite()) {  // kernels promise finite output; this is the last guard
     lambda.setZero();

@@ -18,6 +18,7 @@ constexpr SolverEntry kSolvers[] = {
     {SolverKind::kLemke, "lemke"},
     {SolverKind::kApgd, "apgd"},
     {SolverKind::kNewton, "newton"},
+    {SolverKind::kProx, "prox"},
 };
 
 struct FrictionModelEntry {

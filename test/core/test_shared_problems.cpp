@@ -54,11 +54,19 @@ TEST(SharedProblemSolves, AllFilesArePresent) {
 TEST(SharedProblemSolves, NlgsReachesTheDefaultToleranceOnEveryFc3dProblem) {
   for (const std::string& file : problemFiles("fc3d")) {
     const Problem p = readProblemFile(file);
-    const SolveResult r = solveProblem(p, SolverParams());
+    SolverParams nlgs;
+    nlgs.solver = SolverKind::kNlgs;
+    const SolveResult r = solveProblem(p, nlgs);
     expectFinite(r, file);
     EXPECT_EQ(r.solver, "nlgs") << file;
     EXPECT_EQ(r.status, SolveStatus::kConverged) << file << ": " << r.message;
     EXPECT_LE(r.residual, 1e-3) << file;
+    // auto (the default, a portfolio since #14) as well, whatever its path.
+    const SolveResult a = solveProblem(p, SolverParams());
+    expectFinite(a, file);
+    EXPECT_EQ(a.solver.rfind("auto:", 0), 0u) << file;
+    EXPECT_EQ(a.status, SolveStatus::kConverged) << file << ": " << a.solver << " " << a.message;
+    EXPECT_LE(a.residual, 1e-3) << file;
   }
 }
 

@@ -559,7 +559,7 @@ TEST(Pyramid, ModelSelection) {
   EXPECT_EQ(refused.status, SolveStatus::kNotApplicable);
   // auto with a pyramid: boxed pgs.
   const SolveResult automatic = solveProblem(p, pyramidParams(SolverKind::kAuto, FrictionModel::kPyramid4));
-  EXPECT_EQ(automatic.solver, "pgs");
+  EXPECT_EQ(automatic.solver, "auto:pgs");
   EXPECT_EQ(automatic.friction_model, FrictionModel::kPyramid4);
   EXPECT_EQ(automatic.status, SolveStatus::kConverged);
   // The disc solvers ignore a pyramid and say so.

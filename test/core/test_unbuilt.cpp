@@ -337,22 +337,23 @@ TEST(Unbuilt, FrictionlessProblemsRunPgsUnbuilt) {
   const RandomScene s = randomScene(8, 20, 31, mix);
   for (SolverKind kind : {SolverKind::kPgs, SolverKind::kAuto}) {
     const SolveResult r = solveProblem(s.problem, unbuilt(tight(kind)));
-    EXPECT_EQ(r.solver, "pgs");
+    EXPECT_EQ(r.solver, kind == SolverKind::kAuto ? "auto:pgs" : "pgs");
     EXPECT_TRUE(r.unbuilt);
     expectSameAsBuilt(s.problem, tight(kind));
   }
 }
 
 TEST(Unbuilt, AutoStaysGaussSeidelAtTightTolerances) {
-  // Built, auto picks newton below 1e-4; unbuilt it keeps to Gauss-Seidel (W is not formed).
+  // Built, auto starts with newton below 1e-4 on coupled contacts; unbuilt it starts with
+  // Gauss-Seidel (W is not formed unless a fallback needs it).
   const RandomScene s = randomScene(10, 14, 41);
   const SolveResult u = solveProblem(s.problem, unbuilt(tight(SolverKind::kAuto)));
-  EXPECT_EQ(u.solver, "nlgs");
+  EXPECT_EQ(u.solver, "auto:nlgs");
   EXPECT_TRUE(u.unbuilt);
   EXPECT_EQ(u.status, SolveStatus::kConverged) << u.message;
   EXPECT_NE(u.message.find("unbuilt solve on the body form (10 bodies)"), std::string::npos) << u.message;
   const SolveResult b = solveProblem(builtSparse(s.problem), tight(SolverKind::kAuto));
-  EXPECT_EQ(b.solver, "newton");
+  EXPECT_EQ(b.solver, "auto:newton");
   EXPECT_LT(relDiff(u.forces, b.forces), 1e-7);
 }
 

@@ -406,7 +406,8 @@ TEST(StatsMsg, CarriesTheResult) {
   EXPECT_TRUE(stats.success);
   EXPECT_EQ(stats.status, "converged");
   EXPECT_EQ(stats.status_code, lcs::SolverStats::CONVERGED);
-  EXPECT_EQ(stats.solver, "nlgs");
+  EXPECT_EQ(stats.solver, result.solver);  // auto's path, e.g. "auto:nlgs" (#14)
+  EXPECT_EQ(stats.solver.rfind("auto:", 0), 0u);
   EXPECT_EQ(stats.iterations, result.iterations);
   EXPECT_EQ(stats.residual, result.residual);
   EXPECT_EQ(stats.num_contacts, 4);

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lcp_contact_solver {
@@ -24,6 +25,7 @@ struct SolveContext {
   std::vector<double> mu;     // effective μ per contact
   std::vector<bool> ignored;  // contacts left out (minW, maxF): force stays zero
   double regularization = 0.0;  // r added to W's diagonal
+  int body_dof = 0;  // 6 × bodies when the body form is known: auto's rank-deficiency estimate
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
@@ -45,6 +47,7 @@ struct KernelReport {
   std::string message;        // detail for failures
   std::vector<double> history;  // residual per iteration when params->displayDebug
   FrictionModel friction_model = FrictionModel::kCoulombDisc;  // the law actually solved
+  std::vector<std::pair<std::string, double>> stages;  // auto: (member, seconds) per stage
 };
 
 // Each kernel starts from `lambda` (the warm start, rows of ignored contacts zero) and
@@ -56,6 +59,8 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Semismooth Newton on the Alart-Curnier function (newton.cpp).
 KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
+// Proximal point loop around runNewton on W + σI (prox_newton.cpp).
+KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Polyhedral friction (ctx.params->friction_model a pyramid), pyramid.cpp and
 // gauss_seidel.cpp: Lemke on the Stewart-Trinkle LCP, and Gauss-Seidel on the boxed form.
 KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lcp_contact_solver {
@@ -52,7 +53,11 @@ struct SolveResult {
   // with friction under a pyramid SolverParams::friction_model.
   FrictionModel friction_model = FrictionModel::kCoulombDisc;
   double solve_time = 0.0;    // wall time of the solve, seconds
-  std::string solver;         // name of the solver that ran
+  // Name of the solver that ran; for auto the path of the portfolio, "auto:" and the
+  // members in the order they ran joined by "->" (e.g. "auto:newton->prox").
+  std::string solver;
+  // auto: (member, seconds) per stage of the path, in order; empty for a fixed solver.
+  std::vector<std::pair<std::string, double>> stages;
   // The unbuilt Gauss-Seidel ran on the problem's body form (build_lcp = false): W was
   // never assembled. False for every built solve.
   bool unbuilt = false;

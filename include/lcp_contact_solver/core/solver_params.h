@@ -9,9 +9,11 @@
 namespace lcp_contact_solver {
 
 enum class SolverKind {
-  kAuto,       // friction (μ > 0) with the disc: nlgs for tolerance >= 1e-4; below, newton
-               // up to 200 rows and apgd above (stopping_rule residual; docs/BENCHMARKS.md).
-               // Friction with a pyramid: pgs. No friction: pgs.
+  kAuto,       // the portfolio (contact_solver.cpp, docs/ARCHITECTURE.md): starts with the
+               // member the problem's features predict, watches its progress in slices and
+               // continues from the best iterate with the next member when it stalls or fails.
+               // maxIt and time_budget bound the whole portfolio; SolveResult::solver reports
+               // the path ("auto:newton->prox"), SolveResult::stages the time in each member.
   kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); with friction
                // only for a pyramid friction_model (boxed PGS)
   kNlgs,       // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)
@@ -21,6 +23,8 @@ enum class SolverKind {
                // cone complementarity problem with De Saxcé's fixed point; Coulomb disc
   kNewton,     // semismooth Newton on the Alart-Curnier function, regularized, with line
                // search, warm-started by nlgs; high accuracy, rank-deficient W
+  kProx,       // proximal point outer loop around newton (W + σI, moving prox centre, σ
+               // adapted; prox_newton.cpp): rank-deficient or ill-conditioned W at 1e-8..1e-12
 };
 
 // The friction law. The disc is Coulomb's isotropic cone |λ_t| <= μ λ_n. The pyramids
@@ -120,7 +124,7 @@ struct SolverParams {
 };
 
 const char* solverName(SolverKind kind);
-// Parses "auto", "pgs", "nlgs", "lemke", "apgd", "newton"; false for an unknown name.
+// Parses "auto", "pgs", "nlgs", "lemke", "apgd", "newton", "prox"; false for an unknown name.
 bool parseSolverName(const std::string& name, SolverKind* kind);
 std::vector<std::string> solverNames();
 const char* stoppingRuleName(StoppingRule rule);

@@ -1,0 +1,237 @@
+// auto, the portfolio (contact_solver.cpp): problems built so that the first member fails or
+// stalls and another must carry the solve. Every residual is recomputed here from the
+// returned forces (d = W λ + d_free), independently of the solver's own report.
+#include "hard_case_util.h"
+
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace lcp_contact_solver {
+namespace {
+
+using hard::Body;
+using hard::World;
+
+// A stack of boxes resting face on face, k points per face, alternate boxes `ratio` times
+// heavier, pushed sideways and spun: 3k rows per face against 6 DoF per box, so W is
+// rank-deficient, and the mass ratio makes it ill-conditioned as well.
+Problem boxStack(int boxes, int k, double ratio, double push, double mu) {
+  World w;
+  const Eigen::Vector3d size(1.0, 1.0, 0.5);
+  for (int i = 0; i < boxes; ++i) {
+    Body b = hard::box(i % 2 ? ratio : 1.0, size, Eigen::Vector3d(0.0, 0.0, 0.25 + 0.5 * i));
+    b.v = Eigen::Vector3d(push * (i % 2 ? 1 : -1), 0.3 * push, 0.0);
+    b.w = Eigen::Vector3d(0.0, 0.0, push);
+    w.add(b);
+  }
+  for (int i = 0; i < boxes; ++i)
+    for (const Eigen::Vector3d& p : hard::bottomPoints(w.bodies[i].com, size, k))
+      w.contact(i, i - 1, p, Eigen::Vector3d::UnitZ(), mu);
+  return w.problem();
+}
+
+SolverParams params(SolverKind kind, double tolerance, int max_it) {
+  SolverParams p;
+  p.solver = kind;
+  p.tolerance = tolerance;
+  p.maxIt = max_it;
+  p.initial_guess = false;
+  return p;
+}
+
+// The natural-map residual of the returned forces, from W and d_free alone.
+double recomputedResidual(const Problem& p, const SolveResult& r) {
+  Eigen::VectorXd d;
+  multiply(p.W, r.forces, d);
+  d += p.d_free;
+  return naturalMapResidual(p, effectiveMu(p, SolverParams().mu), r.forces, d);
+}
+
+// The reported path and stages agree: "auto:" + the stage names joined by "->".
+void expectPath(const SolveResult& r) {
+  ASSERT_FALSE(r.stages.empty()) << r.solver;
+  std::string path = "auto:";
+  double total = 0.0;
+  for (std::size_t i = 0; i < r.stages.size(); ++i) {
+    path += (i ? "->" : "") + r.stages[i].first;
+    EXPECT_GE(r.stages[i].second, 0.0);
+    total += r.stages[i].second;
+    if (i > 0) EXPECT_NE(r.stages[i].first, r.stages[i - 1].first) << "consecutive slices are one stage";
+  }
+  EXPECT_EQ(r.solver, path);
+  EXPECT_LE(total, r.solve_time + 1e-6);
+}
+
+TEST(Portfolio, RankDeficientStackWhereNewtonStallsStillConverges) {
+  const Problem p = boxStack(2, 8, 100.0, 0.5, 0.8);
+  const double tol = 1e-8;
+  const SolveResult newton = solveProblem(p, params(SolverKind::kNewton, tol, 20000));
+  ASSERT_FALSE(newton.converged) << "the case must make plain newton stall: " << newton.message;
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 20000));
+  ASSERT_EQ(r.status, SolveStatus::kConverged) << r.solver << ": " << r.message;
+  EXPECT_LE(recomputedResidual(p, r), tol);
+  EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
+  EXPECT_LE(r.iterations, 20000);
+  expectPath(r);
+  EXPECT_EQ(r.solver.rfind("auto:newton->", 0), 0u) << r.solver;  // predicted first, then handed over
+  // The proximal kernel on its own reaches the tolerance too.
+  const SolveResult prox = solveProblem(p, params(SolverKind::kProx, tol, 20000));
+  EXPECT_EQ(prox.status, SolveStatus::kConverged) << prox.message;
+  EXPECT_LE(recomputedResidual(p, prox), tol);
+}
+
+// Heavier stacks where newton and prox both stall: the portfolio must end on the member
+// that progresses (apgd here), within the same iteration cap.
+TEST(Portfolio, StacksWhereOnlyOneMemberProgresses) {
+  for (int boxes : {4, 6}) {
+    const Problem p = boxStack(boxes, 4, 100.0, 0.5, 0.8);
+    const double tol = 1e-8;
+    const SolveResult apgd = solveProblem(p, params(SolverKind::kApgd, tol, 20000));
+    ASSERT_TRUE(apgd.converged) << boxes;
+    const SolveResult newton = solveProblem(p, params(SolverKind::kNewton, tol, 20000));
+    EXPECT_FALSE(newton.converged) << boxes;
+    const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 20000));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << boxes << " " << r.solver << ": " << r.message;
+    EXPECT_LE(recomputedResidual(p, r), tol) << boxes;
+    EXPECT_LE(r.iterations, 20000);
+    expectPath(r);
+    EXPECT_NE(r.solver.find("apgd"), std::string::npos) << r.solver;
+  }
+}
+
+// Contact 0's normal row and column are zero (W stays PSD): Gauss-Seidel cannot divide by
+// W_nn and stops with zero_diagonal; the contact is separating (d_free_n > 0), so the
+// answer exists and the next member finds it.
+Problem zeroDiagonalProblem() {
+  Problem p;
+  // Rows 1..5 are A Aᵀ + I (positive definite, coupling both contacts into one island).
+  Eigen::MatrixXd A(5, 5);
+  A << 1.0, 0.2, 0.0, 0.3, 0.0,  //
+      0.0, 0.8, 0.1, 0.0, 0.2,   //
+      0.2, 0.0, 0.5, 0.1, 0.0,   //
+      0.0, 0.3, 0.0, 0.9, 0.1,   //
+      0.1, 0.0, 0.2, 0.0, 0.7;
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(6, 6);
+  W.bottomRightCorner(5, 5) = A * A.transpose() + Eigen::MatrixXd::Identity(5, 5);
+  p.W = W;
+  p.d_free = Eigen::VectorXd(6);
+  p.d_free << 0.1, 0.2, -0.1, -1.0, 0.3, 0.0;
+  for (int i = 0; i < 2; ++i) {
+    Contact c;
+    c.id = i + 1;
+    c.type = ContactType::kFrictional;
+    c.rows = 3;
+    c.mu = 0.5;
+    p.contacts.push_back(c);
+  }
+  return p;
+}
+
+TEST(Portfolio, GaussSeidelCannotStartAndAnotherMemberCarriesIt) {
+  const Problem p = zeroDiagonalProblem();
+  ASSERT_EQ(validateProblem(p), "");
+  for (double tol : {1e-3, 1e-8}) {
+    const SolveResult nlgs = solveProblem(p, params(SolverKind::kNlgs, tol, 1000));
+    ASSERT_EQ(nlgs.status, SolveStatus::kZeroDiagonal) << nlgs.message;
+    const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 1000));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << tol << " " << r.solver << ": " << r.message;
+    EXPECT_LE(recomputedResidual(p, r), tol);
+    expectPath(r);
+    // W is diagonally dominant where it is not zero: nlgs is predicted, fails, hands over.
+    EXPECT_EQ(r.solver.rfind("auto:nlgs->", 0), 0u) << r.solver;
+    EXPECT_EQ(r.forces[0], 0.0);  // the separating contact carries nothing
+  }
+}
+
+// maxIt bounds the whole portfolio, not each member: too few iterations for any member
+// gives max_iterations with at most maxIt iterations summed over the path.
+TEST(Portfolio, MaxItBoundsTheWholePath) {
+  const Problem p = boxStack(4, 4, 100.0, 0.5, 0.8);
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, 1e-8, 400));
+  EXPECT_EQ(r.status, SolveStatus::kMaxIterations) << r.solver << ": " << r.message;
+  EXPECT_LE(r.iterations, 400);
+  EXPECT_GE(r.stages.size(), 2u) << r.solver;  // newton's share ran out and another member took over
+  expectPath(r);
+  EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
+}
+
+// time_budget bounds the whole portfolio: with a budget far below what the problem needs
+// the solve stops with time_budget and the best iterate, not after each member's budget.
+TEST(Portfolio, TimeBudgetBoundsTheWholePath) {
+  const Problem p = boxStack(6, 8, 100.0, 0.5, 0.8);
+  SolverParams q = params(SolverKind::kAuto, 1e-12, 10000000);
+  q.time_budget = 1e-4;
+  const SolveResult r = solveProblem(p, q);
+  EXPECT_EQ(r.status, SolveStatus::kTimeBudget) << r.solver << ": " << r.message;
+  EXPECT_TRUE(r.forces.allFinite());
+  expectPath(r);
+  EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
+}
+
+// The warm start feeds the first member: solved again from its own answer, auto stops at once.
+TEST(Portfolio, WarmStartFeedsTheFirstMember) {
+  const Problem p = boxStack(3, 4, 1.0, 0.5, 0.8);
+  SolverParams q = params(SolverKind::kAuto, 1e-8, 5000);
+  q.initial_guess = true;
+  ContactSolver solver(q);
+  const SolveResult first = solver.solve(p);
+  ASSERT_TRUE(first.converged) << first.message;
+  EXPECT_GT(first.iterations, 0);
+  const SolveResult second = solver.solve(p);
+  ASSERT_TRUE(second.converged) << second.message;
+  EXPECT_EQ(second.iterations, 0);
+  EXPECT_EQ(second.solver, first.solver.substr(0, first.solver.find("->")));  // only the first member ran
+  EXPECT_LE(recomputedResidual(p, second), 1e-8);
+}
+
+// What each feature predicts (docs/ARCHITECTURE.md): the first member of the path.
+TEST(Portfolio, FirstMemberFollowsTheFeatures) {
+  const Problem stack = boxStack(3, 4, 1.0, 0.5, 0.8);  // coupled normals (4 points per face)
+  EXPECT_EQ(solveProblem(stack, params(SolverKind::kAuto, 1e-8, 5000)).solver.rfind("auto:newton", 0), 0u);
+  EXPECT_EQ(solveProblem(stack, params(SolverKind::kAuto, 1e-2, 5000)).solver.rfind("auto:apgd", 0), 0u);
+  // Separate contacts (W block diagonal): Gauss-Seidel is exact in one sweep.
+  World w;
+  for (int i = 0; i < 3; ++i) {
+    w.add(hard::box(1.0, Eigen::Vector3d(1.0, 1.0, 1.0), Eigen::Vector3d(3.0 * i, 0.0, 0.5)));
+    w.contact(i, -1, Eigen::Vector3d(3.0 * i, 0.0, 0.0), Eigen::Vector3d::UnitZ(), 0.5);
+  }
+  for (double tol : {1e-2, 1e-8}) {
+    const SolveResult r = solveProblem(w.problem(), params(SolverKind::kAuto, tol, 5000));
+    EXPECT_EQ(r.solver, "auto:nlgs") << tol;
+    EXPECT_TRUE(r.converged);
+  }
+  // Torsional friction: only nlgs has the local step, so the path is nlgs alone.
+  Problem torsional;
+  torsional.W = Eigen::MatrixXd(Eigen::Vector4d(0.1, 0.1, 0.1, 0.5).asDiagonal());
+  torsional.d_free = Eigen::Vector4d(-1.0, 0.0, 0.0, -0.05);
+  Contact c;
+  c.id = 1;
+  c.type = ContactType::kTorsional;
+  c.rows = 4;
+  c.mu = 0.5;
+  c.mu_torsional = 0.02;
+  torsional.contacts.push_back(c);
+  const SolveResult t = solveProblem(torsional, params(SolverKind::kAuto, 1e-10, 1000));
+  EXPECT_EQ(t.solver, "auto:nlgs");
+  EXPECT_TRUE(t.converged) << t.message;
+}
+
+TEST(Portfolio, ProxIsANamedSolver) {
+  SolverKind kind;
+  ASSERT_TRUE(parseSolverName("prox", &kind));
+  EXPECT_EQ(kind, SolverKind::kProx);
+  EXPECT_STREQ(solverName(SolverKind::kProx), "prox");
+  const Problem p = boxStack(3, 4, 1.0, 0.5, 0.8);
+  const SolveResult r = solveProblem(p, params(SolverKind::kProx, 1e-10, 5000));
+  EXPECT_EQ(r.solver, "prox");
+  EXPECT_TRUE(r.stages.empty());
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_LE(recomputedResidual(p, r), 1e-10);
+}
+
+}  // namespace
+}  // namespace lcp_contact_solver
