@@ -136,13 +136,13 @@ Islands findIslands(const Problem& problem) {
       const double* col = dense->data() + static_cast<std::ptrdiff_t>(c) * n;
       const int cc = contact_of[c];
       for (int r = 0; r < n; ++r)
-        if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);
+        if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);  // one pass over W
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
     for (int i = 0; i < sparse->blockCount(); ++i)
       for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
         const int j = sparse->block_col[b];
-        if (j == i) continue;
+        if (j == i || sets.find(i) == sets.find(j)) continue;  // values read only across islands
         const int size = (sparse->block_offset[i + 1] - sparse->block_offset[i]) *
                          (sparse->block_offset[j + 1] - sparse->block_offset[j]);
         const double* v = sparse->values.data() + sparse->value_start[b];
