@@ -16,6 +16,8 @@ namespace lcp_contact_solver {
 
 namespace {
 
+constexpr int kParallelMinRows = 200;
+
 // Union-find over contacts, with path halving.
 struct DisjointSets {
   std::vector<int> parent;
@@ -296,7 +298,8 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
       errors[k] = std::current_exception();
     }
   };
-  if (threads <= 1 || count() == 1) {
+  // Below kParallelMinRows rows, waking a worker costs more than the islands' solves.
+  if (threads <= 1 || count() == 1 || static_cast<int>(ctx.offsets.back()) < kParallelMinRows) {
     for (int k = 0; k < count(); ++k) task(k);
   } else {
     ThreadPool::instance().run(count(), threads, task);

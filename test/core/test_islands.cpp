@@ -197,7 +197,7 @@ TEST(Islands, ConvergedMeansTheWholeResidualMeetsTheTolerance) {
 
 TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
   for (bool sparse : {false, true}) {
-    Generated g = generate(9, 4, Kinds::kMixed, 9);
+    Generated g = generate(40, 4, Kinds::kMixed, 9);  // > 200 rows: the pool runs
     const Problem p = sparse ? blockSparse(g.problem) : g.problem;
     for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kNewton, SolverKind::kApgd, SolverKind::kAuto}) {
       const SolveResult one = solveProblem(p, paramsFor(kind, 1e-8, 100000, true, 1));

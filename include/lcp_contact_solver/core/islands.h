@@ -40,11 +40,12 @@ class IslandSolver {
   IslandSolver(const SolveContext& ctx, Islands islands);
   int count() const { return static_cast<int>(islands_.size()); }
   // Runs `kernel` on every island from its rows of `lambda` (ignored contacts taken from
-  // `ctx`) and writes the results back. `threads` <= 1 solves on the calling thread. The
-  // report: the worst status (a failure, then time_budget, then max_iterations), the
-  // largest iteration count, and with the residual stopping rule the whole problem's
-  // error from the islands' (their residuals are each normalised by their own d_free). Each island's residual tolerance is set so that all islands
-  // meeting theirs implies the whole problem meets params.tolerance.
+  // `ctx`) and writes the results back. `threads` <= 1, or fewer than 200 rows, solves on
+  // the calling thread. The report: the worst status (a failure, then time_budget, then
+  // max_iterations), the largest iteration count, and with the residual stopping rule the
+  // whole problem's error from the islands' (each normalised by its own d_free). Each
+  // island's residual tolerance is set so that all islands meeting theirs implies the
+  // whole problem meets params.tolerance.
   KernelReport run(const SolveContext& ctx, const IslandKernel& kernel, Eigen::VectorXd& lambda, int threads);
 
  private:
