@@ -6,7 +6,8 @@
 // one-line error or rejected cycles, exit status 2 for an unreadable bag, never a crash.
 #include "lcp_contact_solver/ros/cycle_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/replay.h"
+#include "lcp_contact_solver/ros/replay/bag_replay.h"
+#include "replay/replay_command.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
 #include "test_scene.h"
 

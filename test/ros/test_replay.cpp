@@ -2,7 +2,9 @@
 // here through the node's own solve path (CycleSolver), and the regression replay of every
 // bag shipped in test/data against the forces and stats recorded in it.
 #include "lcp_contact_solver/ros/cycle_solver.h"
-#include "lcp_contact_solver/ros/replay.h"
+#include "lcp_contact_solver/ros/replay/bag_replay.h"
+#include "lcp_contact_solver/ros/replay/params_file.h"
+#include "replay/replay_command.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
 #include "test_scene.h"
 

@@ -4,7 +4,9 @@
 // (replay.h) with the same parameters: forces within 1e-9 relative, same iteration counts,
 // same status, same order of cycles (the warm start carries across cycles by contact id,
 // so the order matters).
-#include "lcp_contact_solver/ros/replay.h"
+#include "lcp_contact_solver/ros/replay/bag_replay.h"
+#include "lcp_contact_solver/ros/replay/params_file.h"
+#include "replay/summary.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
 
 #include <gtest/gtest.h>

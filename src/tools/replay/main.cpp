@@ -1,7 +1,7 @@
 // rosrun lcp_contact_solver replay IN.bag [--out OUT.bag] [--csv STATS.csv] [name=value ...]
 // Offline replay of recorded contacts/compliance through the node's solve path; see
-// include/lcp_contact_solver/ros/replay.h and the README ("Replaying recorded traffic").
-#include "lcp_contact_solver/ros/replay.h"
+// replay_command.h and the README ("Replaying recorded traffic").
+#include "replay/replay_command.h"
 
 #include <iostream>
 #include <string>

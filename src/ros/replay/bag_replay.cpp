@@ -1,0 +1,411 @@
+#include "lcp_contact_solver/ros/replay/bag_replay.h"
+
+#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/replay/text.h"
+
+#include <ros/message_traits.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <memory>
+#include <set>
+
+namespace lcp_contact_solver_ros {
+
+namespace {
+
+using lcp_contact_solver::Compliance;
+using lcp_contact_solver::ConstraintForces;
+using lcp_contact_solver::ContactArray;
+using lcp_contact_solver::SolverStats;
+
+constexpr const char* kDefaultContacts = "contacts";
+constexpr const char* kDefaultCompliance = "compliance";
+constexpr const char* kDefaultForces = "constraint_forces";
+constexpr const char* kDefaultStats = "contact_solver/stats";
+
+// ---- topics ----------------------------------------------------------------------------
+
+template <typename M>
+struct TopicChoice {
+  static const char* type() { return ros::message_traits::DataType<M>::value(); }
+  static const char* md5() { return ros::message_traits::MD5Sum<M>::value(); }
+};
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
+  return out;
+}
+
+// Finds the topic of type M: `requested` (exact, leading '/' optional), else the default
+// name, else the only topic of that type. "" when there is none and it is optional.
+template <typename M>
+std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& requested,
+                        const std::string& default_name, const std::string& option, bool required,
+                        std::vector<std::string>* notes, std::string* error) {
+  const std::string type = TopicChoice<M>::type();
+  std::set<std::string> all_topics, typed_topics;
+  for (const rosbag::ConnectionInfo* c : connections) {
+    all_topics.insert(c->topic);
+    if (c->datatype == type) typed_topics.insert(c->topic);
+  }
+  auto check = [&](const std::string& topic) -> std::string {
+    for (const rosbag::ConnectionInfo* c : connections) {
+      if (c->topic != topic) continue;
+      if (c->datatype != type) {
+        *error = "topic " + topic + " holds " + c->datatype + ", not " + type;
+        return "";
+      }
+      if (c->md5sum != TopicChoice<M>::md5()) {
+        *error = "topic " + topic + " was recorded with another definition of " + type + " (md5 " + c->md5sum +
+                 ", this build has " + TopicChoice<M>::md5() + ")";
+        return "";
+      }
+    }
+    return topic;
+  };
+  const std::string wanted = normalizeTopic(requested.empty() ? default_name : requested);
+  for (const std::string& topic : all_topics)
+    if (normalizeTopic(topic) == wanted) return check(topic);
+  if (!requested.empty()) {
+    *error = "no topic " + wanted + " in the bag (topics: " +
+             joined(std::vector<std::string>(all_topics.begin(), all_topics.end())) + ")";
+    return "";
+  }
+  if (typed_topics.size() == 1) {
+    const std::string topic = *typed_topics.begin();
+    notes->push_back("using " + topic + " (the only " + type + " topic; " + option + " chooses another)");
+    return check(topic);
+  }
+  if (typed_topics.size() > 1) {
+    *error = "several " + type + " topics (" +
+             joined(std::vector<std::string>(typed_topics.begin(), typed_topics.end())) + "): choose one with " +
+             option;
+    return "";
+  }
+  if (required) *error = "no " + type + " topic in the bag (expected " + wanted + ")";
+  return "";
+}
+
+}  // namespace
+
+// ---- topics ----------------------------------------------------------------------------
+
+std::string normalizeTopic(const std::string& name) {
+  if (name.empty()) return name;
+  const std::size_t start = name.find_first_not_of('/');
+  return start == std::string::npos ? "/" : "/" + name.substr(start);
+}
+
+// ---- output --------------------------------------------------------------------------
+
+const char* StatsCsvWriter::header() { return "stamp,contacts,rows,iterations,residual,converged,status,solve_time"; }
+
+std::string StatsCsvWriter::row(const SolverStats& s) {
+  return stampDigits(s.header.stamp) + "," + std::to_string(s.num_contacts) + "," + std::to_string(s.num_rows) + "," +
+         std::to_string(s.iterations) + "," + exactNumber(s.residual) + "," + (s.converged ? "true" : "false") + "," +
+         s.status + "," + exactNumber(s.solve_time);
+}
+
+std::string StatsCsvWriter::open(const std::string& path) {
+  out_.open(path);
+  if (!out_) return path + ": cannot write (" + std::strerror(errno) + ")";
+  out_ << header() << "\n";
+  return "";
+}
+
+void StatsCsvWriter::write(const SolverStats& stats) { out_ << row(stats) << "\n"; }
+
+// ---- replay ----------------------------------------------------------------------------
+
+namespace {
+
+struct Reference {
+  std::map<ros::Time, ConstraintForces::ConstPtr> forces;
+  std::map<ros::Time, SolverStats::ConstPtr> stats;
+  std::set<ros::Time> used_forces;
+};
+
+class Replayer {
+ public:
+  Replayer(const ReplayOptions& options, const lcs::SolverParams& params, ReplayResult* result)
+      : options_(options), cycle_(params), r_(*result) {}
+
+  void run() {
+    if (!std::filesystem::exists(options_.bag)) {
+      r_.error = "no such file";
+      return;
+    }
+    if (std::filesystem::is_directory(options_.bag)) {
+      r_.error = "is a directory, not a bag";
+      return;
+    }
+    rosbag::Bag bag;
+    bag.open(options_.bag, rosbag::bagmode::Read);
+    if (!chooseTopics(bag)) return;
+    if (!readReference(bag)) return;
+    if (!openOutputs()) return;
+    replay(bag);
+    if (!r_.error.empty()) return;
+    finishUnpaired();
+    countUnusedReference();
+    if (out_) {
+      out_->close();
+      out_.reset();
+    }
+    if (!options_.csv.empty() && !csv_.good()) r_.error = options_.csv + ": write failed";
+  }
+
+ private:
+  bool chooseTopics(rosbag::Bag& bag) {
+    rosbag::View all(bag);
+    const std::vector<const rosbag::ConnectionInfo*> connections = all.getConnections();
+    std::string& error = r_.error;
+    r_.contacts_topic = chooseTopic<ContactArray>(connections, options_.contacts_topic, kDefaultContacts,
+                                                  "--contacts-topic", true, &r_.notes, &error);
+    if (error.empty())
+      r_.compliance_topic = chooseTopic<Compliance>(connections, options_.compliance_topic, kDefaultCompliance,
+                                                    "--compliance-topic", true, &r_.notes, &error);
+    if (error.empty())
+      r_.forces_topic = chooseTopic<ConstraintForces>(connections, options_.forces_topic, kDefaultForces,
+                                                      "--forces-topic", false, &r_.notes, &error);
+    if (error.empty())
+      r_.stats_topic = chooseTopic<SolverStats>(connections, options_.stats_topic, kDefaultStats, "--stats-topic",
+                                                false, &r_.notes, &error);
+    if (!error.empty()) return false;
+    if (r_.forces_topic.empty()) r_.notes.push_back("no recorded ConstraintForces in the bag: nothing to compare with");
+    r_.out_forces_topic = r_.forces_topic.empty() ? normalizeTopic(kDefaultForces) : r_.forces_topic;
+    r_.out_stats_topic = r_.stats_topic.empty() ? normalizeTopic(kDefaultStats) : r_.stats_topic;
+    rosbag::View contacts(bag, rosbag::TopicQuery(r_.contacts_topic));
+    total_ = contacts.size();
+    return true;
+  }
+
+  bool readReference(rosbag::Bag& bag) {
+    std::vector<std::string> topics;
+    if (!r_.forces_topic.empty()) topics.push_back(r_.forces_topic);
+    if (!r_.stats_topic.empty()) topics.push_back(r_.stats_topic);
+    if (topics.empty()) return true;
+    rosbag::View view(bag, rosbag::TopicQuery(topics));
+    for (const rosbag::MessageInstance& m : view) {
+      if (m.getTopic() == r_.forces_topic) {
+        ConstraintForces::ConstPtr msg = m.instantiate<ConstraintForces>();
+        if (!msg) return fail("a message on " + r_.forces_topic + " cannot be read");
+        ref_.forces[msg->header.stamp] = msg;
+      } else {
+        SolverStats::ConstPtr msg = m.instantiate<SolverStats>();
+        if (!msg) return fail("a message on " + r_.stats_topic + " cannot be read");
+        if (msg->status_code >= SolverStats::NO_COMPLIANCE) continue;  // node-side pairing, not a solve
+        ref_.stats[msg->header.stamp] = msg;
+      }
+    }
+    return true;
+  }
+
+  bool openOutputs() {
+    if (!options_.csv.empty()) {
+      const std::string error = csv_.open(options_.csv);
+      if (!error.empty()) return fail(error);
+    }
+    if (!options_.out_bag.empty()) {
+      std::error_code ec;
+      if (std::filesystem::exists(options_.out_bag) &&
+          std::filesystem::equivalent(options_.out_bag, options_.bag, ec))
+        return fail(options_.out_bag + ": the output bag would overwrite the input");
+      out_ = std::make_unique<rosbag::Bag>();
+      try {
+        out_->open(options_.out_bag, rosbag::bagmode::Write);
+      } catch (const std::exception& e) {
+        out_.reset();
+        return fail(options_.out_bag + ": cannot write (" + e.what() + ")");
+      }
+      out_->setCompression(rosbag::compression::LZ4);
+    }
+    return true;
+  }
+
+  void replay(rosbag::Bag& bag) {
+    rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{r_.contacts_topic, r_.compliance_topic}));
+    StampPairer::Pair pair;
+    for (const rosbag::MessageInstance& m : view) {
+      last_time_ = m.getTime();
+      if (m.getTopic() == r_.contacts_topic) {
+        ContactArray::ConstPtr msg = m.instantiate<ContactArray>();
+        if (!msg) {
+          fail("a message on " + r_.contacts_topic + " cannot be read");
+          break;
+        }
+        ++r_.contact_messages;
+        if (options_.progress) options_.progress(r_.contact_messages, total_);
+        if (out_ && options_.copy_inputs) out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+        contacts_time_[msg->header.stamp] = m.getTime();
+        if (pairer_.addContacts(msg, &pair)) solve(pair, m.getTime());
+      } else {
+        Compliance::ConstPtr msg = m.instantiate<Compliance>();
+        if (!msg) {
+          fail("a message on " + r_.compliance_topic + " cannot be read");
+          break;
+        }
+        ++r_.compliance_messages;
+        if (out_ && options_.copy_inputs) out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+        if (pairer_.addCompliance(msg, &pair)) solve(pair, m.getTime());
+      }
+    }
+  }
+
+  void solve(const StampPairer::Pair& pair, const ros::Time& bag_time) {
+    const ros::Time stamp = pair.contacts->header.stamp;
+    contacts_time_.erase(stamp);
+    CycleOutput cycle = cycle_.solve(*pair.contacts, *pair.compliance, true);
+    ++r_.cycles;
+    if (cycle.rejected()) {
+      ++r_.rejected;
+    } else {
+      ++r_.solved;
+      if (cycle.result.converged) ++r_.converged;
+      r_.sum_residual += cycle.result.residual;
+      if (cycle.result.residual > r_.max_residual || r_.solved == 1) {
+        r_.max_residual = cycle.result.residual;
+        r_.worst_residual_stamp = stamp;
+      }
+      r_.total_iterations += cycle.result.iterations;
+      r_.max_iterations = std::max(r_.max_iterations, cycle.result.iterations);
+      r_.total_solve_time += cycle.result.solve_time;
+    }
+    cycle.stats.forces_published = cycle.has_forces;
+    if (cycle.has_forces) ++r_.with_forces;
+    emit(cycle.stats, cycle.has_forces ? &cycle.forces : nullptr, bag_time);
+    compare(cycle, stamp);
+    if (options_.keep_cycles) {
+      ReplayCycle kept;
+      kept.stamp = stamp;
+      kept.bag_time = bag_time;
+      kept.stats = cycle.stats;
+      kept.has_forces = cycle.has_forces;
+      if (cycle.has_forces) kept.forces = std::move(cycle.forces);
+      r_.cycles_kept.push_back(std::move(kept));
+    }
+  }
+
+  void emit(const SolverStats& stats, const ConstraintForces* forces, const ros::Time& bag_time) {
+    if (out_) {
+      if (forces != nullptr) out_->write(r_.out_forces_topic, bag_time, *forces);
+      out_->write(r_.out_stats_topic, bag_time, stats);
+    }
+    if (!options_.csv.empty()) csv_.write(stats);
+  }
+
+  void compare(const CycleOutput& cycle, const ros::Time& stamp) {
+    Comparison& c = r_.comparison;
+    const long index = static_cast<long>(r_.cycles) - 1;
+    if (!r_.forces_topic.empty()) {
+      const auto ref = ref_.forces.find(stamp);
+      if (ref == ref_.forces.end()) {
+        if (cycle.has_forces) {
+          ++c.missing_reference;
+          if (c.first_mismatch.empty()) c.first_mismatch = "stamp " + stampDigits(stamp) + ": no recorded forces";
+        }
+      } else {
+        ref_.used_forces.insert(stamp);
+        if (!cycle.has_forces) {
+          ++c.missing_replay;
+          if (c.first_mismatch.empty())
+            c.first_mismatch = "stamp " + stampDigits(stamp) + ": recorded forces, the replay gave none (" +
+                               cycle.stats.status + ")";
+        } else {
+          const ForceDifference d = compareForces(cycle.forces, *ref->second);
+          if (!d.mismatch.empty()) {
+            ++c.mismatched;
+            if (c.first_mismatch.empty()) c.first_mismatch = "stamp " + stampDigits(stamp) + ": " + d.mismatch;
+          } else {
+            ++c.compared;
+            c.max_abs = std::max(c.max_abs, d.max_abs);
+            c.sum_sq += d.sum_sq;
+            c.values += d.values;
+            if (d.relative > c.max_relative || c.worst_cycle < 0) {
+              c.max_relative = std::max(c.max_relative, d.relative);
+              c.worst_stamp = stamp;
+              c.worst_cycle = index;
+            }
+          }
+        }
+      }
+    }
+    const auto ref_stats = ref_.stats.find(stamp);
+    if (ref_stats != ref_.stats.end()) {
+      const SolverStats& s = *ref_stats->second;
+      ++c.stats_compared;
+      if (s.iterations != cycle.stats.iterations) {
+        if (c.iteration_differences == 0) c.first_iteration_difference = stamp;
+        ++c.iteration_differences;
+      }
+      if (s.status_code != cycle.stats.status_code) ++c.status_differences;
+      c.max_residual_relative = std::max(c.max_residual_relative, relativeDifference(s.residual, cycle.stats.residual));
+    }
+  }
+
+  void finishUnpaired() {
+    r_.duplicates = pairer_.duplicates();
+    r_.unused_compliance = pairer_.waitingCompliance();
+    for (const StampPairer::ContactsPtr& contacts : pairer_.waitingContacts()) {
+      ++r_.unpaired;
+      const auto it = contacts_time_.find(contacts->header.stamp);
+      const ros::Time when = it == contacts_time_.end() ? last_time_ : it->second;
+      const SolverStats stats = rejectedStatsMsg(contacts->header, SolverStats::NO_COMPLIANCE,
+                                                 "no compliance with stamp " + stampDigits(contacts->header.stamp) +
+                                                     " in the bag");
+      emit(stats, nullptr, when);
+    }
+  }
+
+  void countUnusedReference() {
+    for (const auto& entry : ref_.forces) {
+      if (ref_.used_forces.count(entry.first) > 0) continue;
+      ++r_.comparison.missing_replay;
+      if (r_.comparison.first_mismatch.empty())
+        r_.comparison.first_mismatch = "stamp " + stampDigits(entry.first) + ": recorded forces, but no such cycle";
+    }
+  }
+
+  bool fail(const std::string& error) {
+    if (r_.error.empty()) r_.error = error;
+    return false;
+  }
+
+  const ReplayOptions& options_;
+  CycleSolver cycle_;
+  ReplayResult& r_;
+  Reference ref_;
+  StampPairer pairer_;
+  std::map<ros::Time, ros::Time> contacts_time_;  // bag time of contact arrays waiting for compliance
+  ros::Time last_time_;
+  std::size_t total_ = 0;
+  StatsCsvWriter csv_;
+  std::unique_ptr<rosbag::Bag> out_;
+};
+
+}  // namespace
+
+ReplayResult replayBag(const ReplayOptions& options, const lcs::SolverParams& params) {
+  ReplayResult result;
+  if (const std::string error = lcs::validateParams(params); !error.empty()) {
+    result.error = "invalid parameters: " + error;
+    return result;
+  }
+  try {
+    Replayer(options, params, &result).run();
+  } catch (const std::exception& e) {
+    std::string what = e.what();
+    while (!what.empty() && (what.back() == '\n' || what.back() == ' ')) what.pop_back();
+    result.error = "cannot read the bag: " + what;
+  }
+  if (!result.error.empty()) result.cycles_kept.clear();
+  return result;
+}
+}  // namespace lcp_contact_solver_ros

@@ -1,0 +1,78 @@
+#include "replay/summary.h"
+
+#include "lcp_contact_solver/ros/replay/text.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <sstream>
+
+namespace lcp_contact_solver_ros {
+
+std::string formatSummary(const ReplayResult& r) {
+  std::ostringstream out;
+  out << "cycles: " << r.cycles << " from " << r.contacts_topic << " (" << r.contact_messages << ") + "
+      << r.compliance_topic << " (" << r.compliance_messages << "): " << r.solved << " solved, " << r.rejected
+      << " rejected, " << r.unpaired << " contact arrays without compliance";
+  if (r.unused_compliance > 0) out << ", " << r.unused_compliance << " compliances without contacts";
+  if (r.duplicates > 0) out << ", " << r.duplicates << " duplicate stamps (the later message kept)";
+  out << "\n";
+  if (r.solved > 0) {
+    out << "solves: " << r.converged << "/" << r.solved << " converged, " << r.with_forces
+        << " with forces; iterations " << r.total_iterations << " in all, max " << r.max_iterations
+        << "; residual max " << shortNumber(r.max_residual) << " (stamp " << stampDigits(r.worst_residual_stamp)
+        << "), mean " << shortNumber(r.meanResidual()) << "; solve time " << shortNumber(r.total_solve_time)
+        << " s\n";
+  }
+  const Comparison& c = r.comparison;
+  if (r.forces_topic.empty()) {
+    out << "forces: no recorded forces in the bag, nothing compared\n";
+  } else {
+    out << "forces vs recorded " << r.forces_topic << ": " << c.compared << " cycles compared";
+    if (c.compared > 0) {
+      out << "; max |dlambda| " << shortNumber(c.max_abs) << " N, RMS " << shortNumber(c.rms())
+          << " N, max relative " << shortNumber(c.max_relative) << " (worst cycle #" << c.worst_cycle << ", stamp "
+          << stampDigits(c.worst_stamp) << ")";
+    }
+    out << "\n";
+    if (c.mismatched + c.missing_reference + c.missing_replay > 0) {
+      out << "forces not comparable: " << c.mismatched << " cycles with other contacts, " << c.missing_reference
+          << " replayed without a recorded counterpart, " << c.missing_replay
+          << " recorded without a replayed counterpart; first: " << c.first_mismatch << "\n";
+    }
+  }
+  if (!r.stats_topic.empty()) {
+    out << "stats vs recorded " << r.stats_topic << ": " << c.stats_compared << " cycles; iterations differ in "
+        << c.iteration_differences;
+    if (c.iteration_differences > 0) out << " (first at stamp " << stampDigits(c.first_iteration_difference) << ")";
+    out << ", status differs in " << c.status_differences << "; max relative residual difference "
+        << shortNumber(c.max_residual_relative) << "\n";
+  }
+  return out.str();
+}
+
+bool isTerminal(std::FILE* stream) { return stream != nullptr && ::isatty(::fileno(stream)) == 1; }
+
+ProgressBar::ProgressBar(std::FILE* stream, std::size_t total, bool enabled)
+    : stream_(stream), total_(total), enabled_(enabled && stream != nullptr && total > 0) {}
+
+void ProgressBar::update(std::size_t done) {
+  if (!enabled_) return;
+  const int permille = static_cast<int>(std::min<std::size_t>(1000, done * 1000 / total_));
+  if (permille / 10 == last_permille_ / 10 && done != total_) return;  // redraw each percent
+  last_permille_ = permille;
+  constexpr int kWidth = 40;
+  const int filled = permille * kWidth / 1000;
+  std::fprintf(stream_, "\rreplay [%.*s%*s] %3d%%  %zu/%zu", filled, "########################################",
+               kWidth - filled, "", permille / 10, done, total_);
+  std::fflush(stream_);
+}
+
+void ProgressBar::finish() {
+  if (!enabled_ || last_permille_ < 0) return;
+  std::fprintf(stream_, "\n");
+  std::fflush(stream_);
+  enabled_ = false;
+}
+
+}  // namespace lcp_contact_solver_ros
