@@ -1,10 +1,8 @@
-#include "lcp_contact_solver/ros/mujoco_bridge_node.h"
+#include "lcp_contact_solver/ros/sim/mujoco_bridge_node.h"
 
 #include "lcp_contact_solver/ros/msg_conversion.h"
 
 #include <diagnostic_msgs/KeyValue.h>
-#include <ros/callback_queue.h>
-#include <rosgraph_msgs/Clock.h>
 
 #include <boost/make_shared.hpp>
 
@@ -22,15 +20,6 @@ namespace {
 namespace scene = lcs::scene;
 using lcp_contact_solver::ContactPoint;
 
-constexpr double kSpinSlice = 0.01;  // wall s: callbacks are served in slices this long while waiting
-
-template <typename T>
-std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* value, const char* expected) {
-  if (!pnh.hasParam(name)) return "";
-  if (!pnh.getParam(name, *value)) return "parameter " + pnh.resolveName(name) + " must be " + expected;
-  return "";
-}
-
 bool finite(double v) { return std::isfinite(v); }
 
 std::string validate(const MujocoBridgeSettings& s) {
@@ -43,19 +32,12 @@ std::string validate(const MujocoBridgeSettings& s) {
     return "parameter mujoco_solver: " + why + " or model";
   if (!finite(s.mujoco_tolerance)) return "parameter mujoco_tolerance must be finite (< 0 keeps the model's)";
   if (s.steps < 0) return "parameter steps must be >= 0 (0 runs for ever, or for ~duration)";
-  if (!finite(s.duration) || s.duration < 0.0) return "parameter duration must be >= 0 (0 runs for ever)";
   if (!finite(s.dt) || s.dt < 0.0) return "parameter dt must be >= 0 (0 keeps the model's timestep)";
-  if (!finite(s.rate_factor) || s.rate_factor < 0.0) return "parameter rate_factor must be >= 0 (0 runs as fast as possible)";
-  if (!finite(s.force_timeout)) return "parameter force_timeout must be finite (<= 0 waits for ever)";
-  if (!finite(s.wait_for_solver)) return "parameter wait_for_solver must be finite (<= 0 waits for ever)";
   if (s.min_report_subscribers < 0) return "parameter min_report_subscribers must be >= 0";
-  if (!finite(s.linger) || s.linger < 0.0) return "parameter linger must be >= 0";
-  if (s.frame_id.empty()) return "parameter frame_id must not be empty";
   if (s.storage != "auto" && s.storage != "dense" && s.storage != "block_sparse")
     return "parameter storage must be auto, dense or block_sparse";
   if (s.dense_max_rows < 0) return "parameter dense_max_rows must be >= 0";
   if (!finite(s.max_rel_warn) || s.max_rel_warn <= 0.0) return "parameter max_rel_warn must be > 0";
-  if (!finite(s.status_period) || s.status_period <= 0.0) return "parameter status_period must be > 0";
   return "";
 }
 
@@ -98,12 +80,6 @@ geometry_msgs::Vector3 vector(const Eigen::Vector3d& v) {
   return p;
 }
 
-std::string stampText(const ros::Time& stamp) {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(3) << stamp.toSec() << " s";
-  return out.str();
-}
-
 void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue kv;
   kv.key = key;
@@ -122,6 +98,8 @@ const char* const kStateNames[4] = {"open", "stick", "slip", "ignored"};
 }  // namespace
 
 std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
+  const std::string link_error = loadLinkSettings(pnh, s);
+  if (!link_error.empty()) return link_error;
   for (const std::string& error : {
            readParam(pnh, "model", &s->model, "a string"), readParam(pnh, "mode", &s->mode, "a string"),
            readParam(pnh, "cone", &s->cone, "a string"),
@@ -129,22 +107,14 @@ std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSet
            readParam(pnh, "mujoco_iterations", &s->mujoco_iterations, "an integer"),
            readParam(pnh, "mujoco_tolerance", &s->mujoco_tolerance, "a number"),
            readParam(pnh, "compare", &s->compare, "true or false"),
-           readParam(pnh, "steps", &s->steps, "an integer"),
-           readParam(pnh, "duration", &s->duration, "a number"), readParam(pnh, "dt", &s->dt, "a number"),
-           readParam(pnh, "rate_factor", &s->rate_factor, "a number"),
-           readParam(pnh, "force_timeout", &s->force_timeout, "a number"),
-           readParam(pnh, "wait_for_solver", &s->wait_for_solver, "a number"),
+           readParam(pnh, "steps", &s->steps, "an integer"), readParam(pnh, "dt", &s->dt, "a number"),
            readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
-           readParam(pnh, "linger", &s->linger, "a number"),
-           readParam(pnh, "frame_id", &s->frame_id, "a string"),
-           readParam(pnh, "publish_clock", &s->publish_clock, "true or false"),
            readParam(pnh, "include_limits", &s->include_limits, "true or false"),
            readParam(pnh, "include_equalities", &s->include_equalities, "true or false"),
            readParam(pnh, "storage", &s->storage, "a string"),
            readParam(pnh, "dense_max_rows", &s->dense_max_rows, "an integer"),
            readParam(pnh, "max_rel_warn", &s->max_rel_warn, "a number"),
-           readParam(pnh, "print_summary", &s->print_summary, "true or false"),
-           readParam(pnh, "status_period", &s->status_period, "a number")}) {
+           readParam(pnh, "print_summary", &s->print_summary, "true or false")}) {
     if (!error.empty()) return error;
   }
   return validate(*s);
@@ -232,7 +202,11 @@ std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, 
 // ---- node --------------------------------------------------------------------------------
 
 MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
-    : nh_(nh), pnh_(pnh), settings_(loadOrThrow(pnh)), world_(loadWorld(settings_)) {
+    : nh_(nh),
+      pnh_(pnh),
+      settings_(loadOrThrow(pnh)),
+      world_(loadWorld(settings_)),
+      link_(nh, settings_, linkOptions(this)) {
   drive_ = settings_.mode == "drive";
   dt_ = world_->model()->opt.timestep;
   extract_.include_limits = settings_.include_limits;
@@ -241,12 +215,7 @@ MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHan
   if (settings_.storage == "dense") extract_.storage = scene::MujocoExtractOptions::Storage::kDense;
   if (settings_.storage == "block_sparse") extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;
 
-  contacts_pub_ = nh_.advertise<lcp_contact_solver::ContactArray>("contacts", 10);
-  compliance_pub_ = nh_.advertise<lcp_contact_solver::Compliance>("compliance", 10);
-  if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   report_pub_ = pnh_.advertise<diagnostic_msgs::DiagnosticStatus>("step_report", 100);
-  forces_sub_ = nh_.subscribe("constraint_forces", 10, &MujocoBridgeNode::onForces, this);
-  stats_sub_ = nh_.subscribe("contact_solver/stats", 10, &MujocoBridgeNode::onSolverStats, this);
   next_status_time_ = settings_.status_period;
   if (settings_.steps == 0 && settings_.duration > 0.0)
     settings_.steps = std::max(1, static_cast<int>(std::llround(settings_.duration / dt_)));
@@ -254,54 +223,18 @@ MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHan
 
 MujocoBridgeNode::~MujocoBridgeNode() = default;
 
-ros::Time MujocoBridgeNode::stampOf(std::int64_t step) const {
-  ros::Time stamp;
-  stamp.fromNSec(static_cast<std::uint64_t>(std::llround(static_cast<double>(step) * dt_ * 1e9)));
-  return stamp;
-}
-
-void MujocoBridgeNode::onForces(const lcp_contact_solver::ConstraintForces::ConstPtr& msg) {
-  if (awaiting_ && msg->header.stamp == awaiting_stamp_) received_ = msg;
-}
-
-void MujocoBridgeNode::onSolverStats(const lcp_contact_solver::SolverStats::ConstPtr& msg) {
-  if (!awaiting_ || msg->header.stamp != awaiting_stamp_) return;
-  last_stats_ = msg;
-  if (received_) return;
-  if (!msg->success)
-    solver_failure_ = msg->status + (msg->message.empty() ? "" : ": " + msg->message);
-  else if (!msg->forces_published)
-    solver_failure_ = "the solver did not publish the forces";
-}
-
-bool MujocoBridgeNode::waitForSolver() {
-  auto connected = [this] {
-    return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 &&
-           forces_sub_.getNumPublishers() > 0 &&
-           report_pub_.getNumSubscribers() >= static_cast<std::uint32_t>(settings_.min_report_subscribers);
+// The bridge waits for the solver until its forces' timeout (no early end when it leaves),
+// gives the stats of a solve a moment to follow its forces (for the report) and, for tests,
+// waits for ~step_report subscribers too.
+SolverLink::Options MujocoBridgeNode::linkOptions(const MujocoBridgeNode* node) {
+  SolverLink::Options options;
+  options.stop_when_solver_leaves = false;
+  options.stats_grace = 0.05;
+  options.also_ready = [node] {
+    return node->report_pub_.getNumSubscribers() >=
+           static_cast<std::uint32_t>(node->settings_.min_report_subscribers);
   };
-  const bool forever = settings_.wait_for_solver <= 0.0;
-  const ros::WallTime start = ros::WallTime::now();
-  bool told = false;
-  while (ros::ok() && !connected()) {
-    const double waited = (ros::WallTime::now() - start).toSec();
-    if (!forever && waited >= settings_.wait_for_solver) break;
-    if (!told && waited > 1.0) {
-      ROS_INFO_STREAM("Waiting for the contact solver on " << contacts_pub_.getTopic() << " / "
-                                                          << forces_sub_.getTopic());
-      told = true;
-    }
-    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(kSpinSlice));
-  }
-  if (!connected()) {
-    if (ros::ok())
-      ROS_FATAL_STREAM("No contact solver within " << settings_.wait_for_solver << " s: " << contacts_pub_.getTopic()
-                                                   << " has " << contacts_pub_.getNumSubscribers() << " subscribers, "
-                                                   << forces_sub_.getTopic() << " "
-                                                   << forces_sub_.getNumPublishers() << " publishers");
-    return false;
-  }
-  return true;
+  return options;
 }
 
 bool MujocoBridgeNode::run() {
@@ -310,33 +243,19 @@ bool MujocoBridgeNode::run() {
                             << "), cone " << scene::mujocoConeName(m->opt.cone) << ", dt " << dt_ << " s, mode "
                             << settings_.mode << ", MuJoCo solver " << scene::mujocoSolverName(m->opt.solver)
                             << " (" << m->opt.iterations << " iterations, tolerance " << m->opt.tolerance << ")");
-  if (settings_.publish_clock) publishClock(stampOf(0));
-  if (!waitForSolver()) return false;
-  run_start_ = ros::WallTime::now();
+  link_.publishClock(stepStamp(0, dt_));
+  if (!link_.waitForSolver()) return false;
+  link_.startRun();
   while (ros::ok() && (settings_.steps == 0 || counters_.steps < settings_.steps)) {
     step();
-    pace();
+    link_.pace(world_->data()->time);
   }
-  run_wall_time_ = (ros::WallTime::now() - run_start_).toSec();
+  run_wall_time_ = link_.runWallTime();
   std::ostringstream summary;
   writeSummary(summary);
-  if (settings_.print_summary) {  // the table on stdout, one line in the log
-    std::cout << summary.str() << std::flush;
-    ROS_INFO_STREAM("MuJoCo bridge " << (ros::ok() ? "finished" : "interrupted") << ": " << counters_.steps
-                                     << " steps, " << counters_.misses() << " without the solver's forces");
-  } else {
-    ROS_INFO_STREAM("MuJoCo bridge " << (ros::ok() ? "finished" : "interrupted") << "\n" << summary.str());
-  }
-  linger();
+  link_.logSummary("MuJoCo bridge", settings_.print_summary, summary.str(), counters_.steps);
+  link_.linger();
   return ros::ok();
-}
-
-// roscpp writes published messages from its own thread: a node that exits right after its
-// last publish can close the connections before a busy subscriber has read them.
-void MujocoBridgeNode::linger() {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(settings_.linger);
-  while (ros::ok() && ros::WallTime::now() < end)
-    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(kSpinSlice));
 }
 
 void MujocoBridgeNode::step() {
@@ -356,8 +275,8 @@ void MujocoBridgeNode::step() {
   totals_.last_penetration = penetration;
   totals_.max_penetration = std::max(totals_.max_penetration, penetration);
 
-  const ros::Time stamp = stampOf(counters_.steps);
-  publishClock(stamp);
+  const ros::Time stamp = stepStamp(counters_.steps, dt_);
+  link_.publishClock(stamp);
 
   scene::MujocoProblem mp;
   const std::string extract_error = scene::extractProblem(m, d, extract_, &mp);
@@ -367,123 +286,7 @@ void MujocoBridgeNode::step() {
     ROS_ERROR_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": " << extract_error
                                               << "; MuJoCo's own solver takes this step");
   } else if (!mp.problem.contacts.empty()) {
-    ++counters_.steps_with_rows;
-    totals_.last_contacts = mp.ncon;
-    totals_.max_contacts = std::max(totals_.max_contacts, mp.ncon);
-    totals_.max_rows = std::max(totals_.max_rows, mp.problem.rowCount());
-
-    std_msgs::Header header;
-    header.stamp = stamp;
-    header.frame_id = settings_.frame_id;
-    auto contacts = boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
-    auto compliance = boost::make_shared<lcp_contact_solver::Compliance>(toComplianceMsg(mp, header));
-    awaiting_ = true;
-    awaiting_stamp_ = stamp;
-    received_.reset();
-    last_stats_.reset();
-    solver_failure_.clear();
-    compliance_pub_.publish(compliance);
-    contacts_pub_.publish(contacts);
-    const Outcome outcome = waitForForces(stamp);
-
-    diagnostic_msgs::DiagnosticStatus report;
-    report.name = "mujoco_bridge";
-    report.hardware_id = settings_.model;
-    addValue(&report, "step", static_cast<double>(counters_.steps));
-    addValue(&report, "time", d->time);
-    addValue(&report, "mode", settings_.mode);
-    addValue(&report, "cone", scene::mujocoConeName(m->opt.cone));
-    addValue(&report, "contacts", mp.ncon);
-    addValue(&report, "entries", static_cast<double>(mp.entries.size()));
-    addValue(&report, "rows", mp.problem.rowCount());
-    addValue(&report, "dropped_rows", static_cast<double>(mp.dropped_rows.size()));
-    addValue(&report, "penetration", penetration);
-    addValue(&report, "energy", energy);
-    if (mujoco_solves) addValue(&report, "mujoco_solve_time", mujoco_time);
-
-    Eigen::VectorXd lambda;
-    std::string problem_text;
-    switch (outcome) {
-      case Outcome::kForces: {
-        problem_text = toProblemForces(*received_, mp, &lambda);
-        if (!problem_text.empty()) {
-          ++counters_.bad_forces;
-          problem_text = "forces do not fit: " + problem_text;
-        }
-        break;
-      }
-      case Outcome::kTimeout:
-        ++counters_.force_timeouts;
-        problem_text = "no forces within " + std::to_string(settings_.force_timeout) + " s";
-        break;
-      case Outcome::kSolverFailed:
-        ++counters_.solver_failures;
-        problem_text = "the solver gave no forces (" + solver_failure_ + ")";
-        break;
-      case Outcome::kShutdown:
-        problem_text = "shutdown";
-        break;
-    }
-    if (problem_text.empty()) {
-      ++counters_.forces_applied;
-      const double residual = scene::problemResidual(mp, lambda);
-      totals_.last_residual = residual;
-      totals_.max_residual = std::max(totals_.max_residual, residual);
-      period_max_residual_ = std::max(period_max_residual_, residual);
-      addValue(&report, "forces", "received");
-      addValue(&report, "residual", residual);
-      if (last_stats_) {
-        addValue(&report, "iterations", last_stats_->iterations);
-        addValue(&report, "solve_time", last_stats_->solve_time);
-        addValue(&report, "solver", last_stats_->solver);
-        totals_.our_solve_time += last_stats_->solve_time;
-        ++totals_.our_solves;
-      }
-      if (mujoco_solves) {
-        std::vector<lcs::ContactState> states;
-        for (const auto& f : received_->forces) states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, 3)));
-        const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
-        ++counters_.compared;
-        totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
-        totals_.max_rel_diff = std::max(totals_.max_rel_diff, cmp.max_rel);
-        period_max_rel_ = std::max(period_max_rel_, cmp.max_rel);
-        addValue(&report, "max_abs_diff", cmp.max_abs);
-        addValue(&report, "max_rel_diff", cmp.max_rel);
-        addValue(&report, "force_scale", cmp.scale);
-        for (int k = 0; k < 4; ++k) {
-          totals_.state_count[k] += cmp.state_count[k];
-          if (cmp.state_count[k] == 0) continue;
-          totals_.state_max_rel[k] = std::max(totals_.state_max_rel[k], cmp.state_max_abs[k] / cmp.scale);
-          addValue(&report, std::string("max_rel_diff_") + kStateNames[k], cmp.state_max_abs[k] / cmp.scale);
-          addValue(&report, std::string("entries_") + kStateNames[k], cmp.state_count[k]);
-        }
-        if (cmp.max_rel > settings_.max_rel_warn) {
-          ++counters_.over_warn;
-          if (mp.pyramidal)  // an LCP with a unique solution: a difference means an inexact solve
-            ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": our forces differ from MuJoCo's by "
-                                                     << cmp.max_rel << " (relative) on the pyramidal LCP");
-        }
-        report.level = cmp.max_rel > settings_.max_rel_warn && mp.pyramidal ? diagnostic_msgs::DiagnosticStatus::WARN
-                                                                          : diagnostic_msgs::DiagnosticStatus::OK;
-      }
-      if (drive_) {
-        scene::applyConstraintForces(m, d, mp.toEfcForce(lambda));
-        ours_applied = true;
-      }
-      std::ostringstream message;
-      message << mp.ncon << " contacts, " << mp.problem.rowCount() << " rows, residual " << residual;
-      report.message = message.str();
-    } else {
-      report.level = diagnostic_msgs::DiagnosticStatus::WARN;
-      report.message = problem_text;
-      addValue(&report, "forces", problem_text);
-      if (outcome != Outcome::kShutdown)
-        ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": " << problem_text
-                                                 << (drive_ ? "; MuJoCo's own solver takes this step" : ""));
-    }
-    awaiting_ = false;
-    received_.reset();
-    report_pub_.publish(report);
+    ours_applied = exchange(mp, stamp, mujoco_solves ? mujoco_time : -1.0);
   }
 
   // Drive without our forces for a step with constraints: MuJoCo's solver decides it.
@@ -497,52 +300,128 @@ void MujocoBridgeNode::step() {
   statusLine(mp.ncon, mp.problem.rowCount());
 }
 
-MujocoBridgeNode::Outcome MujocoBridgeNode::waitForForces(const ros::Time& stamp) {
-  const bool forever = settings_.force_timeout <= 0.0;
-  const ros::WallTime start = ros::WallTime::now();
-  ros::WallTime next_note = start + ros::WallDuration(5.0);
-  while (true) {
-    if (received_) {
-      // The stats of the same solve usually follow at once; give them a moment for the report.
-      const ros::WallTime got = ros::WallTime::now();
-      while (!last_stats_ && ros::ok() && (ros::WallTime::now() - got).toSec() < 0.05)
-        ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.002));
-      return Outcome::kForces;
-    }
-    if (!solver_failure_.empty()) return Outcome::kSolverFailed;
-    if (!ros::ok()) return Outcome::kShutdown;
-    const ros::WallTime now = ros::WallTime::now();
-    double slice = kSpinSlice;
-    if (!forever) {
-      const double remaining = settings_.force_timeout - (now - start).toSec();
-      if (remaining <= 0.0) return Outcome::kTimeout;
-      slice = std::min(slice, remaining);
-    } else if (now >= next_note) {
-      ROS_WARN_STREAM("Still waiting for the forces of the step at " << stampText(stamp));
-      next_note = now + ros::WallDuration(5.0);
-    }
-    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(slice));
+bool MujocoBridgeNode::exchange(const scene::MujocoProblem& mp, const ros::Time& stamp, double mujoco_time) {
+  const mjModel* m = world_->model();
+  mjData* d = world_->data();
+  ++counters_.steps_with_rows;
+  totals_.last_contacts = mp.ncon;
+  totals_.max_contacts = std::max(totals_.max_contacts, mp.ncon);
+  totals_.max_rows = std::max(totals_.max_rows, mp.problem.rowCount());
+
+  std_msgs::Header header;
+  header.stamp = stamp;
+  header.frame_id = settings_.frame_id;
+  auto contacts = boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
+  auto compliance = boost::make_shared<lcp_contact_solver::Compliance>(toComplianceMsg(mp, header));
+  const SolverLink::Outcome outcome = link_.exchange(stamp, contacts, compliance);
+
+  diagnostic_msgs::DiagnosticStatus report;
+  report.name = "mujoco_bridge";
+  report.hardware_id = settings_.model;
+  addValue(&report, "step", static_cast<double>(counters_.steps));
+  addValue(&report, "time", d->time);
+  addValue(&report, "mode", settings_.mode);
+  addValue(&report, "cone", scene::mujocoConeName(m->opt.cone));
+  addValue(&report, "contacts", mp.ncon);
+  addValue(&report, "entries", static_cast<double>(mp.entries.size()));
+  addValue(&report, "rows", mp.problem.rowCount());
+  addValue(&report, "dropped_rows", static_cast<double>(mp.dropped_rows.size()));
+  addValue(&report, "penetration", totals_.last_penetration);
+  addValue(&report, "energy", totals_.last_energy);
+  if (mujoco_time >= 0.0) addValue(&report, "mujoco_solve_time", mujoco_time);
+
+  Eigen::VectorXd lambda;
+  const std::string problem_text = receive(outcome, mp, &lambda);
+  bool ours_applied = false;
+  if (problem_text.empty()) {
+    ours_applied = useForces(mp, lambda, stamp, mujoco_time >= 0.0, &report);
+  } else {
+    report.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    report.message = problem_text;
+    addValue(&report, "forces", problem_text);
+    if (outcome != SolverLink::Outcome::kShutdown)
+      ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": " << problem_text
+                                               << (drive_ ? "; MuJoCo's own solver takes this step" : ""));
   }
+  report_pub_.publish(report);
+  return ours_applied;
 }
 
-void MujocoBridgeNode::publishClock(const ros::Time& stamp) {
-  if (!settings_.publish_clock) return;
-  rosgraph_msgs::Clock clock;
-  clock.clock = stamp;
-  clock_pub_.publish(clock);
+// λ from the forces of the exchange; empty string, or why the step has none.
+std::string MujocoBridgeNode::receive(SolverLink::Outcome outcome, const scene::MujocoProblem& mp,
+                                      Eigen::VectorXd* lambda) {
+  switch (outcome) {
+    case SolverLink::Outcome::kForces: {
+      const std::string error = toProblemForces(link_.forces(), mp, lambda);
+      if (error.empty()) return "";
+      link_.countBadForces();
+      return "forces do not fit: " + error;
+    }
+    case SolverLink::Outcome::kTimeout:
+      return "no forces within " + std::to_string(settings_.force_timeout) + " s";
+    case SolverLink::Outcome::kNoSolver:
+      return "no solver publishes " + link_.forcesTopic();
+    case SolverLink::Outcome::kSolverFailed:
+      return "the solver gave no forces (" + link_.failure() + ")";
+    case SolverLink::Outcome::kShutdown:
+      break;
+  }
+  return "shutdown";
 }
 
-void MujocoBridgeNode::pace() {
-  if (settings_.rate_factor <= 0.0) {
-    ros::getGlobalCallbackQueue()->callAvailable();
-    return;
+// Our forces came: residual, comparison with MuJoCo's, and in drive mode into the step.
+bool MujocoBridgeNode::useForces(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
+                                 bool mujoco_solves, diagnostic_msgs::DiagnosticStatus* report) {
+  ++counters_.forces_applied;
+  const double residual = scene::problemResidual(mp, lambda);
+  totals_.last_residual = residual;
+  totals_.max_residual = std::max(totals_.max_residual, residual);
+  period_max_residual_ = std::max(period_max_residual_, residual);
+  addValue(report, "forces", "received");
+  addValue(report, "residual", residual);
+  if (const auto& stats = link_.stats()) {
+    addValue(report, "iterations", stats->iterations);
+    addValue(report, "solve_time", stats->solve_time);
+    addValue(report, "solver", stats->solver);
+    totals_.our_solve_time += stats->solve_time;
+    ++totals_.our_solves;
   }
-  const ros::WallTime target = run_start_ + ros::WallDuration(world_->data()->time / settings_.rate_factor);
-  while (ros::ok()) {
-    const double remaining = (target - ros::WallTime::now()).toSec();
-    if (remaining <= 0.0) break;
-    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(std::min(remaining, kSpinSlice)));
+  if (mujoco_solves) compare(mp, lambda, stamp, report);
+  if (drive_) scene::applyConstraintForces(world_->model(), world_->data(), mp.toEfcForce(lambda));
+  std::ostringstream message;
+  message << mp.ncon << " contacts, " << mp.problem.rowCount() << " rows, residual " << residual;
+  report->message = message.str();
+  return drive_;
+}
+
+void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
+                               diagnostic_msgs::DiagnosticStatus* report) {
+  std::vector<lcs::ContactState> states;
+  for (const auto& f : link_.forces().forces)
+    states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, 3)));
+  const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
+  ++counters_.compared;
+  totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
+  totals_.max_rel_diff = std::max(totals_.max_rel_diff, cmp.max_rel);
+  period_max_rel_ = std::max(period_max_rel_, cmp.max_rel);
+  addValue(report, "max_abs_diff", cmp.max_abs);
+  addValue(report, "max_rel_diff", cmp.max_rel);
+  addValue(report, "force_scale", cmp.scale);
+  for (int k = 0; k < 4; ++k) {
+    totals_.state_count[k] += cmp.state_count[k];
+    if (cmp.state_count[k] == 0) continue;
+    totals_.state_max_rel[k] = std::max(totals_.state_max_rel[k], cmp.state_max_abs[k] / cmp.scale);
+    addValue(report, std::string("max_rel_diff_") + kStateNames[k], cmp.state_max_abs[k] / cmp.scale);
+    addValue(report, std::string("entries_") + kStateNames[k], cmp.state_count[k]);
   }
+  if (cmp.max_rel > settings_.max_rel_warn) {
+    ++counters_.over_warn;
+    if (mp.pyramidal)  // an LCP with a unique solution: a difference means an inexact solve
+      ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": our forces differ from MuJoCo's by "
+                                               << cmp.max_rel << " (relative) on the pyramidal LCP");
+  }
+  report->level = cmp.max_rel > settings_.max_rel_warn && mp.pyramidal ? diagnostic_msgs::DiagnosticStatus::WARN
+                                                                      : diagnostic_msgs::DiagnosticStatus::OK;
 }
 
 void MujocoBridgeNode::statusLine(int contacts, int rows) {
@@ -560,7 +439,7 @@ void MujocoBridgeNode::statusLine(int contacts, int rows) {
          << std::setw(6) << rows << std::scientific << std::setprecision(2) << std::setw(14) << period_max_residual_;
     if (compares) line << std::setw(14) << period_max_rel_; else line << std::setw(14) << "-";
     line << std::setw(17) << totals_.last_penetration << std::fixed << std::setprecision(3) << std::setw(12)
-         << totals_.last_energy << std::setw(8) << counters_.misses() << '\n';
+         << totals_.last_energy << std::setw(8) << link_.counters().misses() << '\n';
     std::cout << line.str() << std::flush;
   }
   period_max_rel_ = 0.0;
@@ -576,8 +455,8 @@ void MujocoBridgeNode::writeSummary(std::ostream& out) const {
        << settings_.mode << "): " << counters_.steps << " steps, " << d->time << " s simulated";
   if (run_wall_time_ > 0.0) text << " in " << run_wall_time_ << " s wall";
   text << "\nforces: " << counters_.forces_applied << " of " << counters_.steps_with_rows
-       << " steps with contacts from the solver; " << counters_.force_timeouts << " timeouts, "
-       << counters_.solver_failures << " solver failures, " << counters_.bad_forces << " mismatched";
+       << " steps with contacts from the solver; " << link_.counters().force_timeouts << " timeouts, "
+       << link_.counters().solver_failures << " solver failures, " << link_.counters().bad_forces << " mismatched";
   if (drive_) text << "; " << counters_.fallbacks << " steps by MuJoCo's own solver";
   if (counters_.extract_errors > 0) text << "; " << counters_.extract_errors << " steps not convertible";
   text << "\ncontacts: " << totals_.last_contacts << " at the end, " << totals_.max_contacts << " at most ("

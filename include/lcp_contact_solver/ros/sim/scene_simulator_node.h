@@ -18,11 +18,10 @@
 // the other nodes with /use_sim_time true (demo.launch does) so their clocks follow.
 #pragma once
 
+#include "lcp_contact_solver/ros/sim/solver_link.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <lcp_contact_solver/ConstraintForces.h>
-#include <lcp_contact_solver/SolverStats.h>
 #include <ros/ros.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -38,44 +37,28 @@ namespace lcp_contact_solver_ros {
 
 namespace lcs = ::lcp_contact_solver;
 
-struct SimulatorSettings {
+// The shared parameters (duration, rate_factor, force_timeout, wait_for_solver, linger,
+// frame_id (also tf parent and markers), publish_clock, status_period: solver_link.h) and:
+struct SimulatorSettings : LinkSettings {
   std::string scene = "box_stack";  // <scene_dir>/<scene>.urdf + .yaml
   std::string scene_dir;            // empty: <package>/config/scenes
-  double duration = 0.0;            // simulated s to run; 0 = for ever
-  double rate_factor = 1.0;         // simulated s per wall s; 0 = as fast as possible
-  double force_timeout = 1.0;       // wall s to wait for the forces of a step; <= 0: for ever
   double dt = 0.0;                  // s; 0 = the scene's dt
-  std::string frame_id = "world";   // frame of contacts, tf parent and markers
-  bool publish_clock = true;        // publish /clock with the simulated time
   double marker_period = 0.04;      // simulated s between ~body_markers (while subscribed)
-  double wait_for_solver = 30.0;    // wall s to wait for the solver's connections; <= 0: for ever
   int min_subscribers = 1;          // subscribers `contacts` must have before the first step
   bool print_status = false;        // status lines and the final summary on stdout (demo)
-  double status_period = 1.0;       // simulated s between status lines / diagnostics
   double rest_linear_velocity = 1e-3;   // m/s: slower bodies (and ...)
   double rest_angular_velocity = 1e-2;  // rad/s: ... slower spin) are "at rest" in the summary
-  double linger = 1.0;              // wall s to keep serving after the run, so the last
-                                    // messages reach slow subscribers before the node exits
 };
 
 // Reads every private parameter present over the defaults in `settings`. Empty string, or a
 // sentence naming the parameter of the wrong type or invalid value.
 std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings* settings);
 
-// The stamp of step k (its contacts, compliance, forces and /clock): ros::Time(k·dt),
-// rounded to the nanosecond, so stamps stay exact multiples of dt however long the run.
-ros::Time stepStamp(std::int64_t step_index, double dt);
-
-// What happened to the steps so far.
+// What happened to the steps so far (the misses by cause: SolverLink::counters()).
 struct SimulatorCounters {
   std::int64_t steps = 0;
   std::int64_t steps_with_contacts = 0;
   std::int64_t forces_applied = 0;   // steps integrated with the solver's forces
-  std::int64_t force_timeouts = 0;   // no forces within ~force_timeout, or no solver connected
-  std::int64_t solver_failures = 0;  // the solver's stats said it gave no forces for the step
-  std::int64_t bad_forces = 0;       // forces that did not match the step (ids, rows, values)
-  std::int64_t stale_forces = 0;     // forces of an older step arriving late (ignored)
-  std::int64_t misses() const { return force_timeouts + solver_failures + bad_forces; }
 };
 
 class SceneSimulatorNode {
@@ -99,22 +82,16 @@ class SceneSimulatorNode {
   void writeSummary(std::ostream& out) const;
 
   const SimulatorCounters& counters() const { return counters_; }
+  const LinkCounters& linkCounters() const { return link_.counters(); }
   const lcs::scene::SceneSimulator& simulator() const { return *sim_; }
   const SimulatorSettings& settings() const { return settings_; }
   ros::Time stampOf(std::int64_t step_index) const { return stepStamp(step_index, dt_); }
 
  private:
-  enum class Outcome { kForces, kTimeout, kNoSolver, kSolverFailed, kShutdown };
-
-  void onForces(const lcp_contact_solver::ConstraintForces::ConstPtr& msg);
-  void onSolverStats(const lcp_contact_solver::SolverStats::ConstPtr& msg);
-  bool waitForSolver();
-  Outcome waitForForces(const ros::Time& stamp);
-  void publishClock(const ros::Time& stamp);
+  void onSolverStats(const lcp_contact_solver::SolverStats& msg);
+  void exchange(const lcs::scene::StepProblem& sp, const ros::Time& stamp, Eigen::VectorXd* lambda);
   void publishStaticTransforms();
   void publishState(const ros::Time& stamp);
-  void pace(const ros::WallTime& start);
-  void linger();
   void reportPeriod(const lcs::scene::StepStats& stats);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
@@ -123,28 +100,17 @@ class SceneSimulatorNode {
   SimulatorSettings settings_;
   std::unique_ptr<lcs::scene::SceneSimulator> sim_;
   double dt_ = 0.01;
+  SolverLink link_;
 
-  ros::Publisher contacts_pub_;
-  ros::Publisher compliance_pub_;
-  ros::Publisher clock_pub_;
   ros::Publisher markers_pub_;
-  ros::Subscriber forces_sub_;
-  ros::Subscriber stats_sub_;
   tf2_ros::TransformBroadcaster tf_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   diagnostic_updater::Updater updater_;
-
-  // The step waiting for its forces.
-  bool awaiting_ = false;
-  ros::Time awaiting_stamp_;
-  lcp_contact_solver::ConstraintForces::ConstPtr received_;
-  std::string solver_failure_;  // status of a solve that gave no forces for awaiting_stamp_
 
   SimulatorCounters counters_;
   std::string last_miss_;  // what happened at the last miss (diagnostics)
   double next_marker_time_ = 0.0;
   bool header_printed_ = false;
-  ros::WallTime run_start_;
   double run_wall_time_ = 0.0;
 
   // Solver stats gathered over the current status period.

@@ -19,13 +19,13 @@
 // to MuJoCo's own solver for the step; both are counted and warned about.
 #pragma once
 
+#include "lcp_contact_solver/ros/sim/solver_link.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ConstraintForces.h>
 #include <lcp_contact_solver/ContactArray.h>
-#include <lcp_contact_solver/SolverStats.h>
 #include <ros/ros.h>
 
 #include <Eigen/Core>
@@ -39,7 +39,10 @@ namespace lcp_contact_solver_ros {
 
 namespace lcs = ::lcp_contact_solver;
 
-struct MujocoBridgeSettings {
+// The shared parameters (duration: simulated s to run when steps = 0, rate_factor,
+// force_timeout, wait_for_solver, linger, frame_id (MuJoCo's world frame), publish_clock,
+// status_period: solver_link.h) and:
+struct MujocoBridgeSettings : LinkSettings {
   std::string model = "/usr/share/mujoco/model/humanoid/humanoid.xml";  // MJCF or MJB
   std::string mode = "cross_check";  // cross_check | drive
   std::string cone = "pyramidal";    // pyramidal | elliptic | model (keep the model's)
@@ -50,22 +53,14 @@ struct MujocoBridgeSettings {
   double mujoco_tolerance = 0.0;      // < 0: the model's
   bool compare = true;                // drive: also run MuJoCo's solver to report the difference
   int steps = 0;                      // steps to run; 0 = for ever (or ~duration)
-  double duration = 0.0;              // simulated s to run when steps = 0; 0 = for ever
   double dt = 0.0;                    // MuJoCo's timestep override (s); 0 = the model's
-  double rate_factor = 1.0;           // simulated s per wall s; 0 = as fast as possible
-  double force_timeout = 1.0;         // wall s to wait for the forces of a step; <= 0: for ever
-  double wait_for_solver = 30.0;      // wall s to wait for the solver's connections; <= 0: for ever
   int min_report_subscribers = 0;     // also wait for this many ~step_report subscribers (tests)
-  double linger = 1.0;                // wall s to keep serving after the run (last messages flush)
-  std::string frame_id = "world";     // frame of the contacts (MuJoCo's world frame)
-  bool publish_clock = true;          // publish /clock with the simulated time
   bool include_limits = true;         // joint/tendon limits as unilateral rows
   bool include_equalities = true;     // equality constraints as bilateral rows
   std::string storage = "auto";       // W: auto | dense | block_sparse
   int dense_max_rows = 200;           // auto: block-sparse above this many rows
   double max_rel_warn = 1e-6;         // cross_check: warn when the relative difference exceeds it
   bool print_summary = false;         // status lines and the final summary on stdout (demo)
-  double status_period = 1.0;         // simulated s between status lines
 };
 
 // Reads every private parameter present over the defaults. Empty string, or a sentence naming
@@ -82,18 +77,15 @@ lcp_contact_solver::Compliance toComplianceMsg(const lcs::scene::MujocoProblem& 
 std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces,
                             const lcs::scene::MujocoProblem& problem, Eigen::VectorXd* lambda);
 
+// The steps so far (the misses by cause: SolverLink::counters()).
 struct MujocoBridgeCounters {
   std::int64_t steps = 0;
   std::int64_t steps_with_rows = 0;
   std::int64_t forces_applied = 0;   // steps whose forces came (drive: integrated with them)
-  std::int64_t force_timeouts = 0;
-  std::int64_t solver_failures = 0;  // the solver's stats said it gave no forces
-  std::int64_t bad_forces = 0;       // forces that did not fit the step
   std::int64_t extract_errors = 0;   // steps whose MuJoCo rows could not be converted
   std::int64_t fallbacks = 0;        // drive: steps integrated with MuJoCo's own solver
   std::int64_t compared = 0;         // steps compared with MuJoCo's forces
   std::int64_t over_warn = 0;        // compared steps above ~max_rel_warn
-  std::int64_t misses() const { return force_timeouts + solver_failures + bad_forces; }
 };
 
 // Figures of the run (the summary).
@@ -126,20 +118,20 @@ class MujocoBridgeNode {
 
   void writeSummary(std::ostream& out) const;
   const MujocoBridgeCounters& counters() const { return counters_; }
+  const LinkCounters& linkCounters() const { return link_.counters(); }
   const MujocoBridgeTotals& totals() const { return totals_; }
 
  private:
-  enum class Outcome { kForces, kTimeout, kSolverFailed, kShutdown };
-
-  void onForces(const lcp_contact_solver::ConstraintForces::ConstPtr& msg);
-  void onSolverStats(const lcp_contact_solver::SolverStats::ConstPtr& msg);
-  bool waitForSolver();
-  Outcome waitForForces(const ros::Time& stamp);
-  void publishClock(const ros::Time& stamp);
-  void pace();
-  void linger();
+  static SolverLink::Options linkOptions(const MujocoBridgeNode* node);
+  // The step's rows to the solver and back, with its ~step_report (mujoco_time < 0: MuJoCo's
+  // solver did not run); true when drive mode applied our forces.
+  bool exchange(const lcs::scene::MujocoProblem& mp, const ros::Time& stamp, double mujoco_time);
+  std::string receive(SolverLink::Outcome outcome, const lcs::scene::MujocoProblem& mp, Eigen::VectorXd* lambda);
+  bool useForces(const lcs::scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
+                 bool mujoco_solves, diagnostic_msgs::DiagnosticStatus* report);
+  void compare(const lcs::scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
+               diagnostic_msgs::DiagnosticStatus* report);
   void statusLine(int contacts, int rows);
-  ros::Time stampOf(std::int64_t step) const;
 
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;
@@ -149,22 +141,11 @@ class MujocoBridgeNode {
   bool drive_ = false;
   double dt_ = 0.005;
 
-  ros::Publisher contacts_pub_;
-  ros::Publisher compliance_pub_;
-  ros::Publisher clock_pub_;
+  SolverLink link_;
   ros::Publisher report_pub_;
-  ros::Subscriber forces_sub_;
-  ros::Subscriber stats_sub_;
-
-  bool awaiting_ = false;
-  ros::Time awaiting_stamp_;
-  lcp_contact_solver::ConstraintForces::ConstPtr received_;
-  std::string solver_failure_;
-  lcp_contact_solver::SolverStats::ConstPtr last_stats_;  // of awaiting_stamp_, if it came
 
   MujocoBridgeCounters counters_;
   MujocoBridgeTotals totals_;
-  ros::WallTime run_start_;
   double run_wall_time_ = 0.0;
   double next_status_time_ = 0.0;
   bool header_printed_ = false;
