@@ -122,8 +122,12 @@ int severity(SolveStatus s) {
 }  // namespace
 
 int defaultThreadCount() {
-  const unsigned n = std::thread::hardware_concurrency();
-  return n == 0 ? 1 : static_cast<int>(n);
+  // Asked once: hardware_concurrency() reads the CPU affinity (microseconds per call).
+  static const int count = [] {
+    const unsigned n = std::thread::hardware_concurrency();
+    return n == 0 ? 1 : static_cast<int>(n);
+  }();
+  return count;
 }
 
 Islands findIslands(const Problem& problem) {
