@@ -1,15 +1,19 @@
 #include "lcp_contact_solver/core/islands.h"
 
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <numeric>
+#include <string>
 #include <thread>
+#include <unordered_map>
 #include <variant>
 
 namespace lcp_contact_solver {
@@ -112,6 +116,24 @@ bool failure(SolveStatus s) {
          s == SolveStatus::kNumericalFailure || s == SolveStatus::kInvalidInput;
 }
 
+// Kernels name contacts "contact K (id N)" by their index in the problem they were given:
+// K is renumbered to the whole problem's index.
+std::string globalContactNames(const std::string& message, const std::vector<int>& contacts) {
+  static const std::string kWord = "contact ";
+  std::string out;
+  std::size_t from = 0;
+  for (std::size_t at = message.find(kWord); at != std::string::npos; at = message.find(kWord, at + 1)) {
+    std::size_t end = at + kWord.size();
+    while (end < message.size() && std::isdigit(static_cast<unsigned char>(message[end]))) ++end;
+    if (end == at + kWord.size() || message.compare(end, 5, " (id ") != 0) continue;
+    const unsigned long local = std::stoul(message.substr(at + kWord.size(), end - at - kWord.size()));
+    if (local >= contacts.size()) continue;
+    out += message.substr(from, at + kWord.size() - from) + std::to_string(contacts[local]);
+    from = end;
+  }
+  return out + message.substr(from);
+}
+
 int severity(SolveStatus s) {
   if (failure(s)) return 3;
   if (s == SolveStatus::kTimeBudget) return 2;
@@ -133,7 +155,16 @@ int defaultThreadCount() {
 Islands findIslands(const Problem& problem) {
   const int nc = static_cast<int>(problem.contacts.size());
   DisjointSets sets(nc);
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+  if (problem.bodies) {  // the body form: contacts sharing a (moving) body are coupled
+    const BodyCompliance& B = *problem.bodies;
+    std::vector<int> first_contact(B.body_compliance.size(), -1);
+    for (int i = 0; i < nc; ++i)
+      for (int b : {B.contacts[i].body_a, B.contacts[i].body_b}) {
+        if (b < 0) continue;
+        if (first_contact[b] < 0) first_contact[b] = i;
+        else sets.unite(first_contact[b], i);
+      }
+  } else if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
     const std::vector<int> offsets = problem.rowOffsets();
     std::vector<int> contact_of(offsets.back());
     for (int i = 0; i < nc; ++i) std::fill(contact_of.begin() + offsets[i], contact_of.begin() + offsets[i + 1], i);
@@ -187,6 +218,25 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
     for (int r = offsets[i]; r < offsets[i + 1]; ++r) rows.push_back(r);
   }
   out.d_free = problem.d_free(rows);
+  if (problem.bodies) {  // its bodies renumbered in order of first use, their C_b copied
+    const BodyCompliance& B = *problem.bodies;
+    auto sub = std::make_shared<BodyCompliance>();
+    std::unordered_map<int, int> local_body;
+    sub->contacts.reserve(contacts.size());
+    for (int i : contacts) {
+      ContactJacobian c = B.contacts[i];
+      for (int* b : {&c.body_a, &c.body_b}) {
+        if (*b < 0) continue;
+        const auto it = local_body.emplace(*b, static_cast<int>(sub->body_compliance.size())).first;
+        if (it->second == static_cast<int>(sub->body_compliance.size())) sub->body_compliance.push_back(B.body_compliance[*b]);
+        *b = it->second;
+      }
+      sub->contacts.push_back(std::move(c));
+    }
+    if (B.diagonal.size() > 0) sub->diagonal = B.diagonal(rows);
+    out.bodies = std::move(sub);
+    return out;
+  }
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
     out.W = Eigen::MatrixXd((*dense)(rows, rows));
     return out;
@@ -322,6 +372,7 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
   }
   KernelReport out = worst->report;
   out.history.clear();
+  out.message = globalContactNames(out.message, worst->contacts);
   bool friction_model_set = false;
   for (const Island& isl : islands_) {
     lambda(isl.rows) = isl.lambda;

@@ -4,6 +4,7 @@
 // of Gauss-Seidel sweeps, to 1e-10 for unique solutions at tight tolerance), and the same
 // forces bit for bit whatever the thread count; the symmetric Newton path returns forces
 // whose residual, recomputed here from W, d_free and the forces, meets the tolerance.
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/residual.h"
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
 #include <random>
 
@@ -232,6 +234,89 @@ TEST(Islands, WarmStartAndMaxFWork) {
   EXPECT_GE(a.resolves, 1);
   EXPECT_EQ(a.states, b.states);
   EXPECT_LE(maxDiff(a.forces, b.forces), 1e-10);
+}
+
+// A kernel's message names the contact by its index in the whole problem, not in its island.
+TEST(Islands, MessagesNameContactsOfTheWholeProblem) {
+  Generated g = generate(3, 4, Kinds::kFrictionless, 71);
+  Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(g.problem.W);
+  const int k = 9;  // its own island, with no self-compliance
+  W.row(k).setZero();
+  W.col(k).setZero();
+  g.problem.W = W;
+  for (const Problem& p : {g.problem, blockSparse(g.problem)}) {
+    const SolveResult r = solveProblem(p, paramsFor(SolverKind::kPgs, 1e-8, 1000, true));
+    EXPECT_EQ(r.status, SolveStatus::kZeroDiagonal);
+    EXPECT_NE(r.message.find("contact 9 (id 109)"), std::string::npos) << r.message;
+  }
+}
+
+// The body form: `groups` groups of 3 bodies; each contact joins two bodies of one group or
+// one body and the world; contacts of all groups interleaved.
+Problem bodyForm(int groups, int per_group, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.0, 1.0);
+  auto bodies = std::make_shared<BodyCompliance>();
+  for (int b = 0; b < 3 * groups; ++b) {
+    BodyMatrix C = BodyMatrix::Zero();
+    for (int k = 0; k < 6; ++k) C(k, k) = 1e-4 * (0.5 + pos(rng));
+    bodies->body_compliance.push_back(C);
+  }
+  Problem p;
+  for (int i = 0; i < groups * per_group; ++i) {
+    const int g = static_cast<int>(rng() % groups);
+    Contact c;
+    c.id = 500 + i;
+    c.type = pos(rng) < 0.7 ? ContactType::kFrictional : ContactType::kFrictionless;
+    c.rows = c.type == ContactType::kFrictional ? 3 : 1;
+    c.mu = c.type == ContactType::kFrictional ? 0.5 : -1.0;
+    ContactJacobian cj;
+    cj.rows = c.rows;
+    cj.body_a = 3 * g + static_cast<int>(rng() % 3);
+    cj.body_b = pos(rng) < 0.4 ? -1 : 3 * g + (cj.body_a - 3 * g + 1) % 3;
+    cj.jacobian_a.resize(c.rows, 6);
+    cj.jacobian_b.resize(cj.body_b >= 0 ? c.rows : 0, 6);
+    for (int r = 0; r < c.rows; ++r)
+      for (int k = 0; k < 6; ++k) {
+        cj.jacobian_a(r, k) = u(rng);
+        if (cj.body_b >= 0) cj.jacobian_b(r, k) = u(rng);
+      }
+    bodies->contacts.push_back(cj);
+    p.contacts.push_back(c);
+  }
+  p.d_free.resize(bodies->rowCount());
+  for (int r = 0; r < p.d_free.size(); ++r) p.d_free[r] = -1e-3 * pos(rng) + 2e-4 * u(rng);
+  p.bodies = bodies;
+  return p;
+}
+
+TEST(Islands, TheBodyFormSplitsByBodyAndEqualsTheWholeUnbuiltSolve) {
+  const Problem p = bodyForm(6, 5, 61);
+  ASSERT_EQ(validateProblem(p), "");
+  Problem assembled = p;
+  assembled.bodies.reset();
+  assembled.W = p.bodies->assemble();
+  const Islands by_body = findIslands(p), by_w = findIslands(assembled);
+  EXPECT_GT(by_body.count(), 1);
+  EXPECT_EQ(by_body.contacts, by_w.contacts);
+  const std::vector<int> off = p.rowOffsets();
+  for (const auto& island : by_body.contacts) {  // an island's body form is its rows of W
+    const Problem sub = islandProblem(p, off, island);
+    ASSERT_EQ(validateProblem(sub), "");
+    EXPECT_LE((sub.bodies->toDense() - toDense(islandProblem(assembled, off, island).W)).cwiseAbs().maxCoeff(), 1e-15);
+  }
+  for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
+    SolverParams whole = paramsFor(kind, 1e-300, 25, false), split = paramsFor(kind, 1e-300, 25, true);
+    whole.build_lcp = split.build_lcp = false;
+    const SolveResult a = solveProblem(p, whole), b = solveProblem(p, split);
+    EXPECT_TRUE(a.unbuilt);
+    EXPECT_TRUE(b.unbuilt);
+    EXPECT_LE(maxDiff(a.forces, b.forces), 1e-12) << solverName(kind);
+    for (int threads : {2, 5}) {
+      split.threads = threads;
+      EXPECT_EQ(solveProblem(p, split).forces, b.forces) << threads;
+    }
+  }
 }
 
 // ---- the symmetric active-set Newton ----------------------------------------------------

@@ -23,11 +23,12 @@ struct Islands {
   int count() const { return static_cast<int>(contacts.size()); }
 };
 
-// The islands of an assembled W (dense or block-sparse; not the body form).
+// The islands of W: dense, block-sparse, or the body form (contacts sharing a body).
 Islands findIslands(const Problem& problem);
 
 // The problem restricted to `contacts` (ascending): their rows of W and d_free, same
-// storage as `problem`. `offsets` are problem.rowOffsets().
+// storage as `problem` (the body form: their bodies, renumbered). `offsets` are
+// problem.rowOffsets().
 Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts);
 
 // A kernel run on one island's context (called concurrently for different islands).

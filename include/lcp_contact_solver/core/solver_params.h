@@ -116,7 +116,7 @@ struct SolverParams {
   double time_step = 0.0;
   // Solve W's independent islands separately (islands.h), each with its own stopping
   // test; off: one kernel run on the whole problem. Not with displayDebug (the history is
-  // the whole problem's) nor the unbuilt solve.
+  // the whole problem's). The body form splits by shared bodies.
   bool islands = true;
   // Threads solving islands concurrently (0 = the core count, 1 = the calling thread
   // only). The result does not depend on it.
