@@ -4,7 +4,12 @@
 # Debian's python3 must come first: a pyenv python3 on PATH breaks catkin and rospy.
 export PATH := /usr/bin:/bin:$(PATH)
 BUILD_DIR ?= build
-ASAN_BUILD_DIR ?= build-asan
+# catkin's devel space (executables, generated messages, setup.bash) sits beside the source,
+# not inside build/: rosrun skips every path below <package>/build/. `source devel/setup.bash`
+# then makes rosrun, roslaunch, rosmsg and rostopic find the package.
+DEVEL_DIR ?= $(abspath devel)
+# The other build folders live below build/, so rosrun never sees a second copy of a node.
+ASAN_BUILD_DIR ?= build/asan
 JOBS ?= $(shell nproc)
 PROBLEMS_DIR ?= $(abspath ../shared/problems)
 # rosout and roslaunch write their logs inside the build folder, not in $HOME.
@@ -20,7 +25,7 @@ deps:
 	@scripts/install-deps
 
 configure: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX=$(DEVEL_DIR)
 
 build: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS)
@@ -60,7 +65,7 @@ test-asan:
 # New inputs go to FUZZ_BUILD_DIR/corpus/<target>, crash inputs to FUZZ_BUILD_DIR/artifacts/;
 # a crash fails the target (fix it, then add the input to test/fuzz/corpus/<target>/, which
 # test_fuzz_corpus replays in make test).
-FUZZ_BUILD_DIR ?= build-fuzz
+FUZZ_BUILD_DIR ?= build/fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS ?= dat_reader msg_solve
 fuzz:
@@ -84,18 +89,21 @@ fuzz:
 # everything it started). DEMO_ARGS are demo.launch arguments, e.g.
 #   make demo DEMO_ARGS="scene:=incline duration:=5"
 DEMO_ARGS ?=
-demo: build
+# Builds only what the demo runs (the tests are built by `make test`).
+DEMO_TARGETS = lcp_solve contact_solver_node scene_simulator
+demo: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target $(DEMO_TARGETS)
 	@echo "== Part 1: the shared problems, solved by lcp_solve =="
-	$(BUILD_DIR)/devel/lib/lcp_contact_solver/lcp_solve $(PROBLEMS_DIR)/lcp/*.dat $(PROBLEMS_DIR)/fc3d/*
+	$(DEVEL_DIR)/lib/lcp_contact_solver/lcp_solve $(PROBLEMS_DIR)/lcp/*.dat $(PROBLEMS_DIR)/fc3d/*
 	@echo
 	@echo "== Part 2: contact solver node + scene simulator (ROS, simulated time) =="
-	BUILD_DIR=$(abspath $(BUILD_DIR)) DEMO_ARGS="$(DEMO_ARGS)" scripts/run-demo
+	BUILD_DIR=$(abspath $(BUILD_DIR)) DEVEL_DIR=$(DEVEL_DIR) DEMO_ARGS="$(DEMO_ARGS)" scripts/run-demo
 
 # The benchmark study (docs/BENCHMARKS.md): installs the optional peer/plotting packages,
 # builds bench/work_precision in its own folder, runs every solver and peer on every problem
 # (about 12 minutes on 2 cores) and redraws docs/figures/*.png and the tables in
 # docs/BENCHMARKS.md. Not part of `make test`. BENCH_ARGS passes options (e.g. --quick).
-BENCH_BUILD_DIR ?= build-bench
+BENCH_BUILD_DIR ?= build/bench-study
 BENCH_CSV ?= bench/results/work_precision.csv
 BENCH_ARGS ?=
 bench:
@@ -121,7 +129,7 @@ soak: configure
 stabilization: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target stabilization_tradeoff
 	@mkdir -p bench/results
-	$(BUILD_DIR)/devel/lib/lcp_contact_solver/stabilization_tradeoff --out bench/results/stabilization.csv
+	$(DEVEL_DIR)/lib/lcp_contact_solver/stabilization_tradeoff --out bench/results/stabilization.csv
 
 # Issue #8 benchmarks (docs/BENCHMARKS.md "Paying only for what a scene uses", "Scaling",
 # "Latency and rate"): in-process effect costs and scaling, then the live node/nodelet round
@@ -129,7 +137,7 @@ stabilization: configure
 # (only these targets); CSVs in bench/results/. Not part of `make test`. Each can run alone:
 #   make effects-cost EFFECTS_ARGS="--bases 5 --balls 40"   make scaling SCALING_ARGS="--bases 2,5 --balls 4,40"
 #   make latency LATENCY_ARGS="--modes node --count 100"
-BENCH8_BUILD_DIR ?= build-bench8
+BENCH8_BUILD_DIR ?= build/bench-runtime
 BENCH8_BIN = $(BENCH8_BUILD_DIR)/devel/lib/lcp_contact_solver
 EFFECTS_ARGS ?=
 SCALING_ARGS ?=
@@ -157,4 +165,4 @@ latency: bench8-configure
 	bench/latency.sh --build $(BENCH8_BUILD_DIR) $(LATENCY_ARGS)
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_BUILD_DIR) $(FUZZ_BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(DEVEL_DIR)

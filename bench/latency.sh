@@ -20,7 +20,7 @@
 #         warm  initial_guess=true (the default): the same problem again with the same contact
 #               ids, so after the first cycle the warm start is already the answer
 # Markers: 1 runs a second process subscribed to /contact_solver/markers (node mode only).
-# Defaults: build folder ./build-bench8, all four modes and both starts, markers 0 and 1 (node),
+# Defaults: build folder ./build/bench-runtime, all four modes and both starts, markers 0 and 1 (node),
 # CSV bench/results/latency.csv (replaced), the tables in the .log beside it (`--modes
 # reference` alone writes latency_reference.{csv,log} and leaves latency.{csv,log} alone). A private
 # roscore on a free port, logs in <build>/ros_home; everything started is stopped on exit.
@@ -28,7 +28,7 @@ set -uo pipefail
 export PATH=/usr/bin:/bin:$PATH  # Debian's python3 first: a pyenv python3 breaks rospy tools
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="$here/build-bench8"
+build="$here/build/bench-runtime"
 csv="$here/bench/results/latency.csv"
 modes="reference,node,nodelet,inproc"
 starts="cold,warm"
@@ -50,7 +50,7 @@ while [ $# -gt 0 ]; do
 done
 log="${csv%.csv}.log"
 [ "$modes" = reference ] && log="${csv%.csv}_reference.log"  # a reference-only run keeps the other files
-bin="$build/devel/lib/lcp_contact_solver"
+bin="$devel/lib/lcp_contact_solver"
 for exe in contact_solver_node latency_bench; do
   if [ ! -x "$bin/$exe" ]; then
     echo "latency.sh: $bin/$exe not found: cmake --build $build --target latency_bench" >&2
@@ -64,7 +64,7 @@ if [[ ",$modes," == *,nodelet,* ]] && [ ! -x "$nodelet_exe" ]; then
 fi
 
 build="$(cd "$build" && pwd)"
-bin="$build/devel/lib/lcp_contact_solver"
+bin="$devel/lib/lcp_contact_solver"
 export ROS_HOME="$build/ros_home"
 export ROS_LOG_DIR="$ROS_HOME/log"
 mkdir -p "$ROS_LOG_DIR" "$(dirname "$csv")"
@@ -72,7 +72,7 @@ mkdir -p "$ROS_LOG_DIR" "$(dirname "$csv")"
 [[ ",$modes," == *,reference,* ]] && rm -f "${csv%.csv}_reference.csv"
 set +u
 # shellcheck disable=SC1091
-source "$build/devel/setup.bash"
+source "$devel/setup.bash"
 set -u
 port="$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
 export ROS_MASTER_URI="http://localhost:$port"

@@ -38,7 +38,10 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$csv" ] || csv="$here/bench/results/soak_rss_$(basename "$bag" .bag).csv"
 log="${csv%.csv}.log"
-bin="$build/devel/lib/lcp_contact_solver"
+# The main build's devel space is ./devel (Makefile); another build folder keeps its own.
+devel="${DEVEL_DIR:-$build/devel}"
+[ -f "$devel/setup.bash" ] || devel="$here/devel"
+bin="$devel/lib/lcp_contact_solver"
 for exe in contact_solver_node soak_feeder; do
   if [ ! -x "$bin/$exe" ]; then
     echo "soak: $bin/$exe not found: cmake --build $build --target contact_solver_node soak_feeder" >&2
@@ -48,13 +51,14 @@ done
 [ -r "$bag" ] || { echo "soak: cannot read $bag" >&2; exit 1; }
 
 build="$(cd "$build" && pwd)"
-bin="$build/devel/lib/lcp_contact_solver"
+devel="$(cd "$devel" && pwd)"
+bin="$devel/lib/lcp_contact_solver"
 export ROS_HOME="$build/ros_home"
 export ROS_LOG_DIR="$ROS_HOME/log"
 mkdir -p "$ROS_LOG_DIR" "$(dirname "$csv")"
 set +u
 # shellcheck disable=SC1091
-source "$build/devel/setup.bash"
+source "$devel/setup.bash"
 set -u
 # A master of our own on a free port: never meets a test's or the user's.
 port="$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"

@@ -141,8 +141,8 @@ std::vector<ContactState> classifyContacts(const Problem& problem, const std::ve
       states[i] = ContactState::kStick;
     } else if (l[0] <= 0.0) {
       states[i] = ContactState::kOpen;
-    } else if (c.type == ContactType::kFrictionless) {
-      states[i] = ContactState::kSlip;
+    } else if (c.type == ContactType::kFrictionless || mu[i] == 0.0) {
+      states[i] = ContactState::kClosed;  // no friction law: neither stick nor slip
     } else {
       const double radius = mu[i] * l[0];
       const double tangential = std::hypot(l[1], l[2]);

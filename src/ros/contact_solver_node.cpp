@@ -42,30 +42,39 @@ ContactSolverNode::ContactSolverNode(const ros::NodeHandle& nh, const ros::NodeH
       accepted_(loadOrThrow(pnh)),
       active_(accepted_),
       cycle_(accepted_.solver),
+      inputs_(accepted_.overload, static_cast<std::size_t>(accepted_.queue_size)),
       updater_(nh, pnh, pnh.getNamespace()) {
   setUpDiagnostics();
   setUpReconfigure();
+  solver_thread_ = std::thread([this] { solverLoop(); });
   setUpTopics();
+}
+
+ContactSolverNode::~ContactSolverNode() {
+  contacts_sub_.shutdown();
+  compliance_sub_.shutdown();
+  running_ = false;
+  inputs_.stop();
+  if (solver_thread_.joinable()) solver_thread_.join();
 }
 
 void ContactSolverNode::setUpTopics() {
   const int queue = active_.queue_size;
   forces_pub_ = nh_.advertise<lcp_contact_solver::ConstraintForces>("constraint_forces", queue);
-  stats_pub_ = pnh_.advertise<SolverStats>("stats", queue);
+  // Deep: one stats message per array, also for a burst of dropped ones.
+  stats_pub_ = pnh_.advertise<SolverStats>("stats", std::max(queue, 1000));
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   solve_service_ = pnh_.advertiseService("solve_contacts", &ContactSolverNode::onSolveService, this);
 
-  // onContacts must run before the synchronizer sees the array (callbacks run in
-  // registration order), or an array whose compliance came first would be reported as
-  // unpaired after it was solved.
-  contacts_sub_.registerCallback(&ContactSolverNode::onContacts, this);
-  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(queue), contacts_sub_,
-                                                                        compliance_sub_);
-  sync_->registerCallback(&ContactSolverNode::onPair, this);
+  // The callbacks only hand the messages to inputs_ (cheap), so roscpp's queues hold little
+  // and the backlog is where it is counted; the pairs are solved on solver_thread_.
   // TCP_NODELAY: without it the sender's kernel batches small messages (Nagle), and at
   // rates of ~1 kHz bursts overflow the queues (bench/soak.sh: a third of the pairs lost).
-  contacts_sub_.subscribe(nh_, "contacts", queue, ros::TransportHints().tcpNoDelay());
-  compliance_sub_.subscribe(nh_, "compliance", queue, ros::TransportHints().tcpNoDelay());
+  const int receive_queue = std::max(queue, 100);
+  contacts_sub_ = nh_.subscribe("contacts", receive_queue, &ContactSolverNode::onContacts, this,
+                                ros::TransportHints().tcpNoDelay());
+  compliance_sub_ = nh_.subscribe("compliance", receive_queue, &ContactSolverNode::onCompliance, this,
+                                  ros::TransportHints().tcpNoDelay());
 
   const double period = std::min(0.25, active_.pairing_window / 4.0);
   timer_ = nh_.createTimer(ros::Duration(period), &ContactSolverNode::onTimer, this);
@@ -80,26 +89,49 @@ void ContactSolverNode::setUpReconfigure() {
 }
 
 void ContactSolverNode::setUpDiagnostics() {
-  min_rate_ = active_.diagnostics_min_rate;
-  max_rate_ = active_.diagnostics_max_rate;
   updater_.setHardwareID("lcp_contact_solver");
-  frequency_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
-      diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_), "solve rate");
-  updater_.add(*frequency_);
+  solve_rate_ = std::make_unique<SolveRateStatus>(active_.diagnostics_min_rate, active_.diagnostics_max_rate);
+  updater_.add(*solve_rate_);
   updater_.add("solver", this, &ContactSolverNode::diagnose);
 }
 
 // ---- callbacks ------------------------------------------------------------------------
 
 void ContactSolverNode::onContacts(const ContactArray::ConstPtr& contacts) {
-  std::lock_guard<std::mutex> lock(solve_mutex_);
-  pairing_.expect(contacts->header, ros::Time::now());
+  solve_rate_->contactsReceived();
+  inputs_.addContacts(contacts, ros::Time::now());
 }
 
-void ContactSolverNode::onPair(const ContactArray::ConstPtr& contacts, const Compliance::ConstPtr& compliance) {
+void ContactSolverNode::onCompliance(const Compliance::ConstPtr& compliance) {
+  inputs_.addCompliance(compliance, ros::Time::now());
+}
+
+void ContactSolverNode::solverLoop() {
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  while (running_) {
+    dropped.clear();
+    const bool got = inputs_.take(std::chrono::milliseconds(100), &pair, &dropped);
+    for (const UnsolvedInput& input : dropped) reportUnsolved(input);
+    if (got) onPair(pair);
+  }
+}
+
+void ContactSolverNode::onPair(const InputPair& pair) {
+  const ContactArray::ConstPtr& contacts = pair.contacts;
+  const Compliance::ConstPtr& compliance = pair.compliance;
+  const double queue_time = (ros::WallTime::now() - pair.complete).toSec();
   std::lock_guard<std::mutex> lock(solve_mutex_);
-  pairing_.paired(contacts->header.stamp);
   applyAcceptedSettings();
+  // Stamps going back mean the simulator restarted (or its clock was reset): the contact
+  // ids it sends now name other contacts, so the previous forces must not seed them.
+  if (!last_stamp_.isZero() && contacts->header.stamp < last_stamp_) {
+    ROS_WARN_STREAM_THROTTLE(1.0, "Contacts at " << stampText(contacts->header.stamp) << " come after "
+                                  << stampText(last_stamp_) << ": time jumped back (simulator restart?); "
+                                  << "the warm start is reset");
+    cycle_.resetWarmStart();
+  }
+  last_stamp_ = contacts->header.stamp;
 
   // computeConstraintForces=false only saves building the message when nobody listens.
   const bool want_forces = active_.solver.computeConstraintForces || forces_pub_.getNumSubscribers() > 0;
@@ -119,6 +151,13 @@ void ContactSolverNode::onPair(const ContactArray::ConstPtr& contacts, const Com
   }
   stats->markers_published = publishMarkers(contacts->header, cycle.frames, cycle.problem, cycle.result);
   if (active_.solver.displayDebug) logCycle(cycle.problem, cycle.result);
+  stats->queue_time = queue_time;
+  stats->latency = (ros::WallTime::now() - pair.complete).toSec();
+  {
+    std::lock_guard<std::mutex> health_lock(health_mutex_);
+    health_.max_queue_time = std::max(health_.max_queue_time, stats->queue_time);
+    health_.max_latency = std::max(health_.max_latency, stats->latency);
+  }
   if (allFinite(*stats)) stats_pub_.publish(stats);
 }
 
@@ -165,15 +204,21 @@ void ContactSolverNode::onReconfigure(Config& config, std::uint32_t /*level*/) {
   }
   accepted_ = next;
   settings_changed_ = true;
+  // dynamic_reconfigure writes showTranslation_x/_y/_z to the parameter server; the SOFA
+  // list beside them must say the same, or `rosparam get` shows a stale position.
+  const auto& t = accepted_.display.showTranslation;
+  pnh_.setParam("showTranslation", std::vector<double>(t.begin(), t.end()));
 }
 
 void ContactSolverNode::onTimer(const ros::TimerEvent& /*event*/) {
-  reportUnpaired();
+  for (const UnsolvedInput& input : inputs_.takeExpired(ros::Time::now(), active_.pairing_window))
+    reportUnsolved(input);
   updater_.update();
 }
 
 void ContactSolverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  std::lock_guard<std::mutex> lock(solve_mutex_);
+  const InputCounts inputs = inputs_.counts();
+  std::lock_guard<std::mutex> lock(health_mutex_);
   if (health_.problems_since_report > 0 || !health_.last_converged) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "last solve: %s; %lu rejected/unpaired/failed inputs since the last report",
                     health_.last_status.c_str(), static_cast<unsigned long>(health_.problems_since_report));
@@ -185,8 +230,21 @@ void ContactSolverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("non-converged solves", health_.not_converged);
   status.add("rejected inputs", health_.rejected);
   status.add("unpaired contact arrays", health_.unpaired);
-  status.add("contact arrays waiting for compliance", pairing_.waiting());
+  // Every ContactArray received is in exactly one of the five counts below.
+  status.add("contact arrays received", inputs.arrays_received);
+  status.add("outcome: solved", health_.solves);
+  status.add("outcome: rejected", health_.rejected);
+  status.add("outcome: unpaired (no compliance)", inputs.unpaired);
+  status.add("outcome: dropped (node behind)", inputs.dropped);
+  status.add("outcome: waiting or being solved", inputs.arrays_received - health_.solves - health_.rejected -
+                                                      inputs.unpaired - inputs.dropped);
+  status.add("compliances without contact array", inputs.compliances_unpaired);
+  status.add("overload policy", std::string(overloadPolicyName(inputs_.policy())));
+  status.add("max queue time since last report (s)", health_.max_queue_time);
+  status.add("max latency since last report (s)", health_.max_latency);
   health_.problems_since_report = 0;
+  health_.max_queue_time = 0.0;
+  health_.max_latency = 0.0;
 }
 
 // ---- cycle steps ----------------------------------------------------------------------
@@ -208,7 +266,8 @@ void ContactSolverNode::applyAcceptedSettings() {
 }
 
 void ContactSolverNode::recordSolve(const lcs::SolveResult& result) {
-  frequency_->tick();
+  solve_rate_->solved();
+  std::lock_guard<std::mutex> lock(health_mutex_);
   ++health_.solves;
   health_.last_residual = result.residual;
   health_.last_status = lcs::statusName(result.status);
@@ -220,8 +279,11 @@ void ContactSolverNode::recordSolve(const lcs::SolveResult& result) {
 }
 
 void ContactSolverNode::reject(const std_msgs::Header& header, std::uint8_t status_code, const std::string& message) {
-  ++health_.rejected;
-  ++health_.problems_since_report;
+  {
+    std::lock_guard<std::mutex> lock(health_mutex_);
+    ++health_.rejected;
+    ++health_.problems_since_report;
+  }
   ROS_ERROR_STREAM_THROTTLE(1.0, "Rejected contacts at " << stampText(header.stamp) << ": " << message);
   stats_pub_.publish(boost::make_shared<SolverStats>(rejectedStatsMsg(header, status_code, message)));
 }
@@ -254,16 +316,15 @@ void ContactSolverNode::logCycle(const lcs::Problem& problem, const lcs::SolveRe
   }
 }
 
-void ContactSolverNode::reportUnpaired() {
-  std::lock_guard<std::mutex> lock(solve_mutex_);
-  for (const std_msgs::Header& header : pairing_.takeExpired(ros::Time::now(), active_.pairing_window)) {
-    ++health_.unpaired;
+void ContactSolverNode::reportUnsolved(const UnsolvedInput& input) {
+  {
+    std::lock_guard<std::mutex> lock(health_mutex_);
+    ++(input.behind ? health_.dropped : health_.unpaired);
     ++health_.problems_since_report;
-    const std::string message = "no compliance with stamp " + stampText(header.stamp) + " arrived within " +
-                                std::to_string(active_.pairing_window) + " s";
-    ROS_WARN_STREAM_THROTTLE(1.0, "Contacts at " << stampText(header.stamp) << " not solved: " << message);
-    stats_pub_.publish(boost::make_shared<SolverStats>(rejectedStatsMsg(header, SolverStats::NO_COMPLIANCE, message)));
   }
+  ROS_WARN_STREAM_THROTTLE(1.0, "Contacts at " << stampText(input.header.stamp) << " not solved: " << input.reason);
+  const std::uint8_t code = input.behind ? SolverStats::DROPPED : SolverStats::NO_COMPLIANCE;
+  stats_pub_.publish(boost::make_shared<SolverStats>(rejectedStatsMsg(input.header, code, input.reason)));
 }
 
 NodeSettings ContactSolverNode::latestSettings() {

@@ -20,6 +20,9 @@ std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f) {
   return c;
 }
 
+// Force arrows: magenta, apart from every state colour and every body colour.
+const std_msgs::ColorRGBA kForceArrowColor = rgba(1.0f, 0.0f, 1.0f);
+
 geometry_msgs::Point toPoint(const Eigen::Vector3d& v) {
   geometry_msgs::Point p;
   p.x = v.x();
@@ -81,9 +84,12 @@ void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFra
     auto m = baseMarker(header, kNsForces, static_cast<int>(i), visualization_msgs::Marker::ARROW, options);
     m.points.push_back(toPoint(f.position));
     m.points.push_back(toPoint(f.position + options.force_arrow_scale * force));
-    m.scale.x = 0.05 * options.cone_height;  // shaft diameter
-    m.scale.y = 0.1 * options.cone_height;   // head diameter
-    m.color = stateColor(result.states[i]);
+    // One colour for every arrow, none of the state colours: the sphere at its foot says
+    // the state, the arrow only the force. Thick enough to read from a metre away.
+    m.scale.x = 0.2 * options.cone_height;  // shaft diameter
+    m.scale.y = 0.4 * options.cone_height;  // head diameter
+    m.scale.z = 0.5 * options.cone_height;  // head length
+    m.color = kForceArrowColor;
     markers->markers.push_back(m);
   }
 }
@@ -145,12 +151,14 @@ void addHeatmaps(const std_msgs::Header& header, const lcs::Problem& problem, co
 
 }  // namespace
 
+// Saturated hues that the scene simulator's muted body palette does not use.
 std_msgs::ColorRGBA stateColor(lcs::ContactState state) {
   switch (state) {
     case lcs::ContactState::kOpen: return rgba(0.6f, 0.6f, 0.6f);
-    case lcs::ContactState::kStick: return rgba(0.1f, 0.8f, 0.1f);
-    case lcs::ContactState::kSlip: return rgba(1.0f, 0.55f, 0.0f);
+    case lcs::ContactState::kStick: return rgba(0.1f, 1.0f, 0.1f);
+    case lcs::ContactState::kSlip: return rgba(1.0f, 0.0f, 0.0f);
     case lcs::ContactState::kIgnored: return rgba(0.2f, 0.3f, 1.0f);
+    case lcs::ContactState::kClosed: return rgba(0.0f, 0.9f, 1.0f);
   }
   return rgba(1.0f, 0.0f, 1.0f);
 }

@@ -484,6 +484,7 @@ lcs::SolverStats rejectedStatsMsg(const std_msgs::Header& header, std::uint8_t s
 
 std::string statusCodeName(std::uint8_t status_code) {
   if (status_code == lcs::SolverStats::NO_COMPLIANCE) return "no_compliance";
+  if (status_code == lcs::SolverStats::DROPPED) return "dropped";
   if (status_code < lcs::SolverStats::NO_COMPLIANCE)
     return lcs::statusName(static_cast<lcs::SolveStatus>(status_code));  // "unknown" past the last
   return "unknown";

@@ -49,11 +49,12 @@ std_msgs::ColorRGBA rgba(float r, float g, float b, float a) {
   return c;
 }
 
-// Distinct, readable colours for dynamic bodies (cycled).
+// Muted, distinct colours for dynamic bodies (cycled). Muted so that the solver's saturated
+// contact colours (stick green, slip red, closed cyan, magenta force arrows) stand out.
 std_msgs::ColorRGBA paletteColor(int index) {
-  static const float kPalette[][3] = {{0.90f, 0.55f, 0.20f}, {0.25f, 0.55f, 0.85f}, {0.35f, 0.70f, 0.35f},
-                                      {0.80f, 0.30f, 0.35f}, {0.60f, 0.45f, 0.80f}, {0.85f, 0.75f, 0.25f},
-                                      {0.30f, 0.70f, 0.70f}, {0.75f, 0.45f, 0.60f}};
+  static const float kPalette[][3] = {{0.45f, 0.55f, 0.75f}, {0.75f, 0.68f, 0.50f}, {0.55f, 0.50f, 0.70f},
+                                      {0.50f, 0.65f, 0.62f}, {0.70f, 0.55f, 0.55f}, {0.60f, 0.62f, 0.45f},
+                                      {0.40f, 0.48f, 0.58f}, {0.68f, 0.60f, 0.68f}};
   const auto& c = kPalette[index % (sizeof(kPalette) / sizeof(kPalette[0]))];
   return rgba(c[0], c[1], c[2], 1.0f);
 }

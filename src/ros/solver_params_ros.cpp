@@ -209,10 +209,23 @@ lcs::SolverParams defaultSolverParams() {
   return params;
 }
 
+namespace {
+
+std::string readOverloadPolicy(const ros::NodeHandle& pnh, OverloadPolicy* policy) {
+  std::string name = overloadPolicyName(*policy);
+  std::string error = readParam(pnh, "overload", &name);
+  if (error.empty() && !parseOverloadPolicy(name, policy))
+    error = "parameter overload: unknown policy '" + name + "' (one of drop_oldest, queue)";
+  return error;
+}
+
+}  // namespace
+
 std::string loadSettings(const ros::NodeHandle& pnh, NodeSettings* s) {
   for (const std::string& error : {
            readSolverParams(pnh, &s->solver), readDisplayOptions(pnh, &s->display),
            readParam(pnh, "pairing_window", &s->pairing_window), readParam(pnh, "queue_size", &s->queue_size),
+           readOverloadPolicy(pnh, &s->overload),
            readParam(pnh, "diagnostics_min_rate", &s->diagnostics_min_rate),
            readParam(pnh, "diagnostics_max_rate", &s->diagnostics_max_rate)}) {
     if (!error.empty()) return error;
@@ -233,10 +246,19 @@ std::string validateSettings(const NodeSettings& s) {
   return "";
 }
 
+// Spaces around the name and the value are not part of them: 'tolerance = 1e-3' is
+// what a user writes in YAML.
+std::string trimmed(const std::string& text) {
+  const char* space = " \t\r\n";
+  const std::size_t first = text.find_first_not_of(space);
+  if (first == std::string::npos) return "";
+  return text.substr(first, text.find_last_not_of(space) - first + 1);
+}
+
 std::string applyOverride(const std::string& assignment, lcs::SolverParams* params) {
   const std::size_t eq = assignment.find('=');
   if (eq == std::string::npos) return "override '" + assignment + "' is not of the form name=value";
-  const std::string name = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  const std::string name = trimmed(assignment.substr(0, eq)), value = trimmed(assignment.substr(eq + 1));
   for (const OverrideField& field : overrideFields()) {
     if (name != field.name) continue;
     if (!field.parse(value, params)) return "override " + name + "='" + value + "' must be " + field.expected;

@@ -606,7 +606,7 @@ ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorX
     cmp.max_abs = std::max(cmp.max_abs, entry_max);
     if (i < states.size()) {
       const int s = static_cast<int>(states[i]);
-      if (s >= 0 && s < 4) {
+      if (s >= 0 && s < kContactStateCount) {
         ++cmp.state_count[s];
         cmp.state_max_abs[s] = std::max(cmp.state_max_abs[s], entry_max);
       }

@@ -418,12 +418,54 @@ TEST_F(ContactSolverNodeTest, ReconfigureTakesEffectAndRejectsInvalidValues) {
   EXPECT_TRUE(capped->success);  // best iterate at the cap is still published
 
   dynamic_reconfigure::Config invalid;
-  setDouble(&invalid, "tolerance", -1.0);
+  setDouble(&invalid, "tolerance", std::numeric_limits<double>::quiet_NaN());  // no range stops a NaN
   const dynamic_reconfigure::Config in_force = reconfigure(invalid);
   EXPECT_EQ(doubleIn(in_force, "tolerance"), 0.001);  // refused: the old value stays
   const lcs::SolverStats* still = solve(makeScene(freshIds(), freshStamp()));
   ASSERT_NE(still, nullptr);
   EXPECT_EQ(still->iterations, 2);  // maxIt=2 still in force, tolerance unchanged
+
+  // Out of the .cfg's range: dynamic_reconfigure clamps to the bound (what tools show).
+  dynamic_reconfigure::Config negative;
+  setDouble(&negative, "erp", -1.0);
+  EXPECT_EQ(doubleIn(reconfigure(negative), "erp"), 0.0);
+  dynamic_reconfigure::Config large;
+  setDouble(&large, "erp", 7.0);
+  EXPECT_EQ(doubleIn(reconfigure(large), "erp"), 1.0);
+  dynamic_reconfigure::Config back;
+  setDouble(&back, "erp", 0.0);
+  reconfigure(back);
+}
+
+TEST_F(ContactSolverNodeTest, TimeJumpingBackResetsTheWarmStart) {
+  const std::int64_t ids = freshIds();
+  const lcs::SolverStats* first = solve(makeScene(ids, freshStamp()));
+  ASSERT_NE(first, nullptr);
+  const int cold = first->iterations;
+  const lcs::SolverStats* again = solve(makeScene(ids, freshStamp()));
+  ASSERT_NE(again, nullptr);
+  ASSERT_LT(again->iterations, cold);  // warm: the same contacts start from their forces
+  // A simulator that restarted: its stamps begin again, the same ids name new contacts.
+  const lcs::SolverStats* restarted = solve(makeScene(ids, ros::Time(1000.0 + static_cast<double>(ids))));
+  ASSERT_NE(restarted, nullptr);
+  EXPECT_EQ(restarted->iterations, cold);  // from zero, as the first time
+  EXPECT_TRUE(restarted->success);
+}
+
+TEST_F(ContactSolverNodeTest, ReconfigureKeepsTheShowTranslationListInStep) {
+  dynamic_reconfigure::Config change;
+  setDouble(&change, "showTranslation_x", 1.5);
+  setDouble(&change, "showTranslation_z", -0.25);
+  reconfigure(change);
+  std::vector<double> list;
+  ASSERT_TRUE(ros::param::get(kSolver + "/showTranslation", list));
+  ASSERT_EQ(list.size(), 3u);
+  EXPECT_EQ(list[0], 1.5);
+  EXPECT_EQ(list[2], -0.25);
+  dynamic_reconfigure::Config back;
+  setDouble(&back, "showTranslation_x", 0.0);
+  setDouble(&back, "showTranslation_z", 0.0);
+  reconfigure(back);
 }
 
 TEST_F(ContactSolverNodeTest, ForcesPublishedWithoutSubscriberOnlyWithComputeConstraintForces) {

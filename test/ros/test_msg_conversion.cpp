@@ -6,17 +6,20 @@
 #include "lcp_contact_solver/ros/cycle_log.h"
 #include "lcp_contact_solver/ros/markers.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/pairing_monitor.h"
+#include "lcp_contact_solver/ros/input_queue.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/solve_rate_status.h"
 #include "test_scene.h"
 
 #include <Eigen/Geometry>
+#include <boost/make_shared.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <set>
+#include <thread>
 
 namespace lcs = lcp_contact_solver;
 using namespace lcp_contact_solver_ros;
@@ -467,6 +470,18 @@ TEST(SolverParamsRos, OverridesParseAndNameTheirFaults) {
   EXPECT_EQ(p.maxIt, 50);  // failed overrides change nothing
 }
 
+TEST(SolverParamsRos, OverridesTrimSpacesAroundNameAndValue) {
+  lcs::SolverParams p = defaultSolverParams();
+  EXPECT_EQ(applyOverride("tolerance = 1e-3", &p), "");  // as written in a YAML list
+  EXPECT_EQ(p.tolerance, 1e-3);
+  EXPECT_EQ(applyOverride("  maxIt=\t42 ", &p), "");
+  EXPECT_EQ(p.maxIt, 42);
+  EXPECT_EQ(applyOverride("solver = newton", &p), "");
+  EXPECT_EQ(p.solver, lcs::SolverKind::kNewton);
+  EXPECT_NE(applyOverride(" = 3", &p).find("'' is not a solver parameter"), std::string::npos);
+  EXPECT_NE(applyOverride("maxIt = ", &p).find("an integer"), std::string::npos);
+}
+
 TEST(SolverParamsRos, ConfigRoundTripAndRejection) {
   NodeSettings s;
   s.solver.maxIt = 77;
@@ -551,6 +566,22 @@ TEST_F(Markers, StableNamespacesAndNoHeatmapByDefault) {
   EXPECT_EQ(find(markers, kNsFrictionCones)->points.size(), 2u * 12u * 3u);
 }
 
+TEST_F(Markers, ColoursTellStatesAndForcesApart) {
+  const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, DisplayOptions());
+  std::vector<std_msgs::ColorRGBA> colours;
+  for (int s = 0; s < lcs::kContactStateCount; ++s) colours.push_back(stateColor(static_cast<lcs::ContactState>(s)));
+  bool arrows = false;
+  for (const auto& m : markers.markers) {
+    if (m.ns != kNsForces) continue;
+    arrows = true;
+    for (const auto& state : colours) EXPECT_NE(m.color, state) << "a force arrow has a state's colour";
+    EXPECT_GE(m.scale.x, 0.1 * DisplayOptions().cone_height);  // readable shaft
+  }
+  ASSERT_TRUE(arrows);
+  for (std::size_t a = 0; a < colours.size(); ++a)
+    for (std::size_t b = a + 1; b < colours.size(); ++b) EXPECT_NE(colours[a], colours[b]) << a << " " << b;
+}
+
 TEST_F(Markers, ForceArrowsScaleWithTheParameter) {
   DisplayOptions options;
   options.force_arrow_scale = 0.5;
@@ -597,19 +628,126 @@ TEST(HeatColor, DivergesAroundZero) {
 
 // ---- pairing and debug summary --------------------------------------------------------
 
-TEST(PairingMonitor, ReportsOnlyArraysWaitingPastTheWindow) {
-  PairingMonitor monitor;
-  std_msgs::Header a, b;
-  a.stamp = ros::Time(1, 0);
-  b.stamp = ros::Time(2, 0);
-  monitor.expect(a, ros::Time(10, 0));
-  monitor.expect(b, ros::Time(10, 0));
-  monitor.paired(b.stamp);
-  EXPECT_TRUE(monitor.takeExpired(ros::Time(10, 400000000), 0.5).empty());
-  const auto expired = monitor.takeExpired(ros::Time(10, 600000000), 0.5);
+namespace {
+
+lcs::ContactArray::ConstPtr arrayAt(double t) {
+  auto a = boost::make_shared<lcs::ContactArray>();
+  a->header.stamp = ros::Time(t);
+  return a;
+}
+
+lcs::Compliance::ConstPtr complianceAt(double t) {
+  auto c = boost::make_shared<lcs::Compliance>();
+  c->header.stamp = ros::Time(t);
+  return c;
+}
+
+// Every array received is in exactly one outcome.
+void expectAccounted(const InputCounts& c) {
+  EXPECT_EQ(c.arrays_received, c.taken + c.unpaired + c.dropped + c.waiting());
+}
+
+}  // namespace
+
+TEST(InputQueue, PairsByStampInEitherOrderAndReportsOnlyArraysWaitingPastTheWindow) {
+  InputQueue queue(OverloadPolicy::kQueue, 10);
+  const ros::Time now(10, 0);
+  queue.addContacts(arrayAt(1), now);
+  queue.addContacts(arrayAt(2), now);
+  queue.addCompliance(complianceAt(3), now);  // its array comes later
+  queue.addCompliance(complianceAt(2), now);
+  queue.addContacts(arrayAt(3), now);
+  EXPECT_TRUE(queue.takeExpired(ros::Time(10, 400000000), 0.5).empty());
+  const auto expired = queue.takeExpired(ros::Time(10, 600000000), 0.5);
   ASSERT_EQ(expired.size(), 1u);
-  EXPECT_EQ(expired[0].stamp, a.stamp);
-  EXPECT_EQ(monitor.waiting(), 0u);
+  EXPECT_EQ(expired[0].header.stamp, ros::Time(1));
+  EXPECT_FALSE(expired[0].behind);
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  ASSERT_TRUE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  EXPECT_EQ(pair.contacts->header.stamp, ros::Time(2));
+  EXPECT_EQ(pair.compliance->header.stamp, ros::Time(2));
+  ASSERT_TRUE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  EXPECT_EQ(pair.contacts->header.stamp, ros::Time(3));
+  EXPECT_FALSE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  EXPECT_TRUE(dropped.empty());
+  const InputCounts c = queue.counts();
+  EXPECT_EQ(c.arrays_received, 3u);
+  EXPECT_EQ(c.taken, 2u);
+  EXPECT_EQ(c.unpaired, 1u);
+  EXPECT_EQ(c.waiting(), 0u);
+  expectAccounted(c);
+}
+
+TEST(InputQueue, DropOldestSolvesTheNewestAndCountsTheRestAsBehind) {
+  InputQueue queue(OverloadPolicy::kDropOldest, 10);
+  for (int k = 1; k <= 5; ++k) {
+    queue.addContacts(arrayAt(k), ros::Time(100));
+    queue.addCompliance(complianceAt(k), ros::Time(100));
+  }
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  ASSERT_TRUE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  EXPECT_EQ(pair.contacts->header.stamp, ros::Time(5));
+  ASSERT_EQ(dropped.size(), 4u);
+  for (const UnsolvedInput& d : dropped) {
+    EXPECT_TRUE(d.behind);
+    EXPECT_NE(d.reason.find("drop_oldest"), std::string::npos);
+  }
+  const InputCounts c = queue.counts();
+  EXPECT_EQ(c.dropped, 4u);
+  EXPECT_EQ(c.unpaired, 0u);  // the node's backlog is never blamed on the simulator
+  expectAccounted(c);
+}
+
+TEST(InputQueue, QueuePolicyKeepsOrderAndDropsTheOldestPastItsCapacity) {
+  InputQueue queue(OverloadPolicy::kQueue, 3);
+  for (int k = 1; k <= 5; ++k) {
+    queue.addCompliance(complianceAt(k), ros::Time(100));  // compliance first this time
+    queue.addContacts(arrayAt(k), ros::Time(100));
+  }
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  std::vector<double> solved;
+  while (queue.take(std::chrono::milliseconds(0), &pair, &dropped)) solved.push_back(pair.contacts->header.stamp.toSec());
+  EXPECT_EQ(solved, (std::vector<double>{3, 4, 5}));
+  ASSERT_EQ(dropped.size(), 2u);
+  EXPECT_EQ(dropped[0].header.stamp, ros::Time(1));
+  EXPECT_TRUE(dropped[0].behind);
+  expectAccounted(queue.counts());
+  EXPECT_EQ(queue.counts().waiting(), 0u);
+}
+
+TEST(InputQueue, RepeatedStampAndLoneCompliancesAreAccounted) {
+  InputQueue queue(OverloadPolicy::kQueue, 10);
+  queue.addContacts(arrayAt(1), ros::Time(100));
+  queue.addContacts(arrayAt(1), ros::Time(100));  // a restarted simulator reuses the stamp
+  queue.addCompliance(complianceAt(7), ros::Time(100));
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  EXPECT_FALSE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  ASSERT_EQ(dropped.size(), 1u);
+  EXPECT_FALSE(dropped[0].behind);
+  EXPECT_NE(dropped[0].reason.find("same stamp"), std::string::npos);
+  queue.addCompliance(complianceAt(1), ros::Time(100));
+  ASSERT_TRUE(queue.take(std::chrono::milliseconds(0), &pair, &dropped));
+  EXPECT_TRUE(queue.takeExpired(ros::Time(200), 0.5).empty());  // the lone compliance goes quietly
+  const InputCounts c = queue.counts();
+  EXPECT_EQ(c.compliances_unpaired, 1u);
+  EXPECT_EQ(c.arrays_received, 2u);
+  expectAccounted(c);
+}
+
+TEST(InputQueue, StopWakesAWaitingTake) {
+  InputQueue queue(OverloadPolicy::kQueue, 10);
+  std::thread stopper([&queue] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    queue.stop();
+  });
+  std::vector<UnsolvedInput> dropped;
+  InputPair pair;
+  EXPECT_FALSE(queue.take(std::chrono::seconds(30), &pair, &dropped));
+  stopper.join();
 }
 
 TEST(CycleLog, NamesTheWorstContact) {
@@ -629,4 +767,37 @@ TEST(CycleLog, NamesTheWorstContact) {
   const std::string line = cycleSummary(c.problem, result, mu);
   EXPECT_NE(line.find("4 contacts, 9 rows (dense W)"), std::string::npos) << line;
   EXPECT_NE(line.find("worst contact " + std::to_string(worst)), std::string::npos) << line;
+}
+
+namespace {
+
+std::string summaryOf(lcp_contact_solver_ros::SolveRateStatus& task, std::uint8_t* level) {
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  task.run(status);
+  *level = status.level;
+  return status.message;
+}
+
+}  // namespace
+
+TEST(SolveRateStatus, IdleIsWaitingNotAnError) {
+  lcp_contact_solver_ros::SolveRateStatus task(0.0, 1e12);  // no bound a real rate can cross
+  std::uint8_t level = 255;
+  EXPECT_NE(summaryOf(task, &level).find("waiting for contacts"), std::string::npos);
+  EXPECT_EQ(level, diagnostic_msgs::DiagnosticStatus::OK);
+  task.contactsReceived();
+  task.solved();
+  summaryOf(task, &level);
+  EXPECT_EQ(level, diagnostic_msgs::DiagnosticStatus::OK);
+  const std::string idle_again = summaryOf(task, &level);  // nothing new since
+  EXPECT_NE(idle_again.find("last received"), std::string::npos) << idle_again;
+  EXPECT_EQ(level, diagnostic_msgs::DiagnosticStatus::OK);
+}
+
+TEST(SolveRateStatus, WarnsWhenContactsComeButSolvingIsTooSlow) {
+  lcp_contact_solver_ros::SolveRateStatus task(1e9, 2e9);  // no machine solves this fast
+  task.contactsReceived();
+  std::uint8_t level = 0;
+  EXPECT_NE(summaryOf(task, &level).find("below"), std::string::npos);
+  EXPECT_EQ(level, diagnostic_msgs::DiagnosticStatus::WARN);
 }

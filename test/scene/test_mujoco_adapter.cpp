@@ -266,15 +266,15 @@ TEST(MujocoElliptic, HumanoidDifferencesPerContactState) {
   if (!haveModel(kHumanoid)) GTEST_SKIP() << kHumanoid << " missing (libmujoco-samples)";
   auto world = loadWorld(kHumanoid, tightPgs("elliptic", 3000));
   ContactSolver newton(params(SolverKind::kNewton, 1e-11, 5000));
-  double state_max[4] = {0, 0, 0, 0};
-  int state_count[4] = {0, 0, 0, 0};
+  double state_max[kContactStateCount] = {};
+  int state_count[kContactStateCount] = {};
   int same_steps = 0, other_steps = 0;
   double same_max = 0, other_max = 0;
   runCrossCheck(*world, 1000, MujocoExtractOptions(), [&](int s, const MujocoProblem& mp) {
     const SolveResult r = newton.solve(mp.problem);
     ASSERT_TRUE(r.converged) << "step " << s << ": " << r.message;
     const ForceComparison c = compareForces(mp, r.forces, r.states);
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < kContactStateCount; ++k) {
       state_count[k] += c.state_count[k];
       if (c.state_count[k] > 0) state_max[k] = std::max(state_max[k], c.state_max_abs[k] / c.scale);
     }

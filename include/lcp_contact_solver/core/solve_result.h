@@ -14,9 +14,11 @@ namespace lcp_contact_solver {
 enum class ContactState : std::uint8_t {
   kOpen = 0,     // no force: separating or just touching
   kStick = 1,    // force strictly inside the friction cone (bilateral rows: always)
-  kSlip = 2,     // force on the cone boundary (frictionless contacts with force: slip)
+  kSlip = 2,     // force on the cone boundary
   kIgnored = 3,  // excluded by minW or maxF; force zero
+  kClosed = 4,   // force and no friction to stick or slip with: frictionless, or μ = 0
 };
+constexpr int kContactStateCount = 5;
 
 enum class SolveStatus : std::uint8_t {
   kConverged = 0,         // residual reached the tolerance

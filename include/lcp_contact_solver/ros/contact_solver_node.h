@@ -7,7 +7,8 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/ros/cycle_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/pairing_monitor.h"
+#include "lcp_contact_solver/ros/input_queue.h"
+#include "lcp_contact_solver/ros/solve_rate_status.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -17,17 +18,16 @@
 #include <lcp_contact_solver/ContactArray.h>
 #include <lcp_contact_solver/ContactSolverConfig.h>
 #include <lcp_contact_solver/SolveContacts.h>
-#include <message_filters/subscriber.h>
-#include <message_filters/sync_policies/exact_time.h>
-#include <message_filters/synchronizer.h>
 #include <ros/ros.h>
 
 #include <boost/thread/recursive_mutex.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 namespace lcp_contact_solver_ros {
 
@@ -35,12 +35,14 @@ class ContactSolverNode {
  public:
   // Reads the private parameters; throws std::invalid_argument naming the bad one.
   ContactSolverNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);
+  ~ContactSolverNode();
+  ContactSolverNode(const ContactSolverNode&) = delete;
+  ContactSolverNode& operator=(const ContactSolverNode&) = delete;
 
  private:
   using ContactArray = lcp_contact_solver::ContactArray;
   using Compliance = lcp_contact_solver::Compliance;
   using Config = lcp_contact_solver::ContactSolverConfig;
-  using SyncPolicy = message_filters::sync_policies::ExactTime<ContactArray, Compliance>;
 
   // Counts behind /diagnostics.
   struct Health {
@@ -48,6 +50,9 @@ class ContactSolverNode {
     std::uint64_t not_converged = 0;
     std::uint64_t rejected = 0;
     std::uint64_t unpaired = 0;
+    std::uint64_t dropped = 0;
+    double max_latency = 0.0;     // since the last report, s
+    double max_queue_time = 0.0;  // since the last report, s
     std::uint64_t problems_since_report = 0;  // rejections, unpaired, failed solves
     double last_residual = 0.0;
     std::string last_status = "no solve yet";
@@ -59,7 +64,10 @@ class ContactSolverNode {
   void setUpDiagnostics();
 
   void onContacts(const ContactArray::ConstPtr& contacts);
-  void onPair(const ContactArray::ConstPtr& contacts, const Compliance::ConstPtr& compliance);
+  void onCompliance(const Compliance::ConstPtr& compliance);
+  // The solver thread: takes complete pairs from inputs_ and solves them one at a time.
+  void solverLoop();
+  void onPair(const InputPair& pair);
   bool onSolveService(lcp_contact_solver::SolveContacts::Request& request,
                       lcp_contact_solver::SolveContacts::Response& response);
   void onReconfigure(Config& config, std::uint32_t level);
@@ -74,7 +82,7 @@ class ContactSolverNode {
   bool publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
                       const lcs::Problem& problem, const lcs::SolveResult& result);
   void logCycle(const lcs::Problem& problem, const lcs::SolveResult& result);
-  void reportUnpaired();
+  void reportUnsolved(const UnsolvedInput& input);
 
   NodeSettings latestSettings();
 
@@ -85,27 +93,29 @@ class ContactSolverNode {
   NodeSettings accepted_;      // latest valid settings; the next cycle applies them
   bool settings_changed_ = false;
 
-  std::mutex solve_mutex_;  // guards the members down to health_
+  std::mutex solve_mutex_;  // guards active_ and cycle_ (the solver thread and the service)
   NodeSettings active_;     // settings of the current cycle
   CycleSolver cycle_;       // messages → problem → solve (warm start) → messages
-  PairingMonitor pairing_;
+  ros::Time last_stamp_;    // of the last pair taken for a solve
+
+  std::mutex health_mutex_;  // guards health_ (read by diagnostics while a solve runs)
   Health health_;
+  InputQueue inputs_;
+  std::atomic<bool> running_{true};
+  std::thread solver_thread_;
 
   ros::Publisher forces_pub_;
   ros::Publisher stats_pub_;
   ros::Publisher markers_pub_;
   ros::ServiceServer solve_service_;
-  message_filters::Subscriber<ContactArray> contacts_sub_;
-  message_filters::Subscriber<Compliance> compliance_sub_;
-  std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
+  ros::Subscriber contacts_sub_;
+  ros::Subscriber compliance_sub_;
 
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_;
 
   diagnostic_updater::Updater updater_;
-  double min_rate_ = 0.0;  // FrequencyStatus keeps pointers to these
-  double max_rate_ = 0.0;
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> frequency_;
+  std::unique_ptr<SolveRateStatus> solve_rate_;
   ros::Timer timer_;
 };
 

@@ -3,6 +3,7 @@
 // "name=value" overrides, and validated before use.
 #pragma once
 
+#include "lcp_contact_solver/ros/input_queue.h"
 #include "lcp_contact_solver/core/solver_params.h"
 
 #include <lcp_contact_solver/ContactSolverConfig.h>
@@ -35,6 +36,8 @@ struct NodeSettings {
   DisplayOptions display;
   double pairing_window = 0.5;  // s
   int queue_size = 10;
+  // What the node does when pairs come faster than it solves (input_queue.h).
+  OverloadPolicy overload = OverloadPolicy::kQueue;
   double diagnostics_min_rate = 1.0;   // Hz
   double diagnostics_max_rate = 2000.0;  // Hz
 };

@@ -243,8 +243,8 @@ struct ForceComparison {
   double max_rel = 0.0;
   double scale = 0.0;  // max |f_mujoco| (1 when all are zero)
   // Indexed by ContactState: entries and the max abs difference among their rows.
-  int state_count[4] = {0, 0, 0, 0};
-  double state_max_abs[4] = {0.0, 0.0, 0.0, 0.0};
+  int state_count[kContactStateCount] = {};
+  double state_max_abs[kContactStateCount] = {};
 };
 ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorXd& lambda,
                               const std::vector<ContactState>& states = {});

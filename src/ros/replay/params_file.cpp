@@ -28,7 +28,7 @@ const std::set<std::string>& nodeOnlyParams() {
   static const std::set<std::string> names = {
       "computeConstraintForces", "showCellWidth", "showTranslation", "showTranslation_x", "showTranslation_y",
       "showTranslation_z",  // the last three: dynamic_reconfigure's copies (rosparam dump of a running node)
-      "pairing_window", "queue_size",
+      "pairing_window", "queue_size", "overload",
       "force_arrow_scale", "show_w_heatmap", "heatmap_max_rows", "cone_height", "marker_lifetime",
       "diagnostics_min_rate", "diagnostics_max_rate"};
   return names;

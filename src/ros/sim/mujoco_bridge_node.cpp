@@ -93,7 +93,7 @@ void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key,
   addValue(status, key, out.str());
 }
 
-const char* const kStateNames[4] = {"open", "stick", "slip", "ignored"};
+const char* const kStateNames[lcs::kContactStateCount] = {"open", "stick", "slip", "ignored", "closed"};
 
 }  // namespace
 
@@ -398,7 +398,7 @@ void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::Vect
                                diagnostic_msgs::DiagnosticStatus* report) {
   std::vector<lcs::ContactState> states;
   for (const auto& f : link_.forces().forces)
-    states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, 3)));
+    states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, lcs::kContactStateCount - 1)));
   const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
   ++counters_.compared;
   totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
@@ -407,7 +407,7 @@ void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::Vect
   addValue(report, "max_abs_diff", cmp.max_abs);
   addValue(report, "max_rel_diff", cmp.max_rel);
   addValue(report, "force_scale", cmp.scale);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < lcs::kContactStateCount; ++k) {
     totals_.state_count[k] += cmp.state_count[k];
     if (cmp.state_count[k] == 0) continue;
     totals_.state_max_rel[k] = std::max(totals_.state_max_rel[k], cmp.state_max_abs[k] / cmp.scale);

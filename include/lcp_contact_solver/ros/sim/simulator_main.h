@@ -1,6 +1,8 @@
 // main() of a simulator node beside the solver (scene_simulator, mujoco_bridge).
 #pragma once
 
+#include "lcp_contact_solver/ros/sim_time_guard.h"
+
 #include <ros/ros.h>
 
 #include <stdexcept>
@@ -16,6 +18,7 @@ int runSimulatorMain(int argc, char** argv, const char* name, const char* load_w
   // the fatal line is printed.
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
+  SimTimeGuard sim_time(pnh);
   try {
     Node node(nh, pnh);
     return node.run() ? 0 : 1;
