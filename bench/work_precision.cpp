@@ -5,7 +5,11 @@
 //
 //   work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]
 //                  [--families fc3d,lcp,scenes] [--filter SUBSTRING] [--solvers a,b,...]
-//                  [--quick]
+//                  [--quick] [--regret FILE]
+//
+// At the end it writes the "auto regret" table (markdown, --regret, default
+// bench/results/auto_regret.md): per problem and tolerance, auto's time over the fastest of
+// our other solvers and over the fastest peer that reached the same residual.
 #include "peers.h"
 #include "scene_problems.h"
 
@@ -71,6 +75,7 @@ struct Options {
   std::string problems_dir = LCS_PROBLEMS_DIR;
   std::string scenes_dir = LCS_SCENES_DIR;
   std::string out = "bench/results/work_precision.csv";
+  std::string regret = "bench/results/auto_regret.md";
   double budget = 2.0;          // s, per solve
   double min_time = 0.05;       // s, repeat until the repeats add up to this...
   int min_repeats = 3;          // ...and at least this many
@@ -155,6 +160,7 @@ std::vector<OurSolver> ourSolvers() {
       {"nlgs-sor1.3", K::kNlgs, F::kCoulombDisc, 1.3, false, true, false},
       {"apgd", K::kApgd},
       {"newton", K::kNewton},
+      {"prox", K::kProx},
       {"pgs", K::kPgs, F::kCoulombDisc, 1.0, false, false, true},
       {"lemke", K::kLemke, F::kCoulombDisc, 1.0, true, false, true},
       {"pgs-pyramid4", K::kPgs, F::kPyramid4, 1.0, false, true, false},
@@ -190,7 +196,10 @@ void writeHeader(std::ostream& os) {
         "time_s,time_min_s,repeats,residual,model_residual,peer_error\n";
 }
 
+std::vector<Row> g_rows;  // every row written, for the regret table
+
 void writeRow(std::ostream& os, const Row& r) {
+  g_rows.push_back(r);
   os << r.family << ',' << r.problem << ',' << r.contacts << ',' << r.rows << ',' << r.solver << ','
      << r.setting << ',' << fmt(r.tolerance) << ',' << r.status << ',' << (r.converged ? 1 : 0) << ','
      << r.iterations << ',' << fmt(r.time_median) << ',' << fmt(r.time_min) << ',' << r.repeats << ','
@@ -366,6 +375,127 @@ void runPeer(const Options& opt, const BenchProblem& bp, Peer& peer, std::ostrea
   peer.release();
 }
 
+// ---- the auto regret table ------------------------------------------------------------------
+
+// A row reached tolerance tol: its residual (disc, recomputed) is at most tol and it ended
+// without a failure. Direct methods (Lemke) count at every tolerance their residual meets.
+bool reached(const Row& r, double tol) {
+  if (std::isnan(r.time_median) || !(r.residual <= tol)) return false;
+  return r.status == "converged" || r.setting == "direct" || r.setting.rfind("it=", 0) == 0;
+}
+
+double geomean(const std::vector<double>& v) {
+  if (v.empty()) return kNaN;
+  double s = 0.0;
+  for (double x : v) s += std::log(x);
+  return std::exp(s / static_cast<double>(v.size()));
+}
+
+void writeRegret(const Options& opt, const std::vector<Row>& rows) {
+  // (problem, tolerance) -> auto's time, fastest own, fastest peer, fastest Siconos
+  struct Cell {
+    double auto_time = kNaN;
+    bool auto_ok = false, auto_ran = false;
+    double own = kNaN, peer = kNaN, siconos = kNaN;
+    std::string own_name, peer_name;
+  };
+  std::map<std::pair<std::string, double>, Cell> cells;
+  std::set<std::string> own_names;
+  for (const OurSolver& s : ourSolvers()) own_names.insert(s.name);
+  std::vector<std::string> order;
+  for (const Row& r : rows) {
+    const std::string key = r.family + "/" + r.problem;
+    if (std::find(order.begin(), order.end(), key) == order.end()) order.push_back(key);
+    for (double tol : opt.tolerances) {
+      // A tolerance-swept row speaks for its own tolerance; direct and iteration-capped rows
+      // for every tolerance their residual meets.
+      const bool swept = !std::isnan(r.tolerance);
+      if (swept && std::abs(r.tolerance - tol) > 1e-3 * tol) continue;
+      Cell& c = cells[{key, tol}];
+      if (r.solver == "auto") {
+        c.auto_ran = c.auto_ran || !std::isnan(r.time_median);
+        if (reached(r, tol)) { c.auto_time = r.time_median; c.auto_ok = true; }
+        continue;
+      }
+      if (!reached(r, tol)) continue;
+      auto better = [&](double& slot, std::string* name) {
+        if (std::isnan(slot) || r.time_median < slot) {
+          slot = r.time_median;
+          if (name) *name = r.solver;
+        }
+      };
+      if (own_names.count(r.solver)) better(c.own, &c.own_name);
+      else {
+        better(c.peer, &c.peer_name);
+        if (r.solver.rfind("siconos", 0) == 0) better(c.siconos, nullptr);
+      }
+    }
+  }
+  std::ofstream md(opt.regret);
+  if (!md) {
+    std::cerr << "work_precision: cannot write " << opt.regret << "\n";
+    return;
+  }
+  md << "Summary per tolerance (geometric means over the problems where both sides reached it;\n"
+        "\"auto missed\" counts problems some own solver solved and auto did not):\n\n"
+        "| tolerance | problems | auto / fastest own: geo mean | max | > 1.5x | auto missed | auto / best Siconos: geo mean (n) | Siconos solved, auto not | auto / fastest peer: geo mean (n) |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
+  for (double tol : opt.tolerances) {
+    std::vector<double> own, sic, peer;
+    int problems = 0, missed = 0, over = 0, sic_missed = 0;
+    double worst = kNaN;
+    for (const std::string& key : order) {
+      const auto it = cells.find({key, tol});
+      if (it == cells.end() || !it->second.auto_ran) continue;
+      const Cell& c = it->second;
+      ++problems;
+      if (!std::isnan(c.own)) {
+        if (!c.auto_ok) ++missed;
+        else {
+          const double q = c.auto_time / c.own;
+          own.push_back(q);
+          if (q > 1.5) ++over;
+          if (std::isnan(worst) || q > worst) worst = q;
+        }
+      }
+      if (!std::isnan(c.siconos)) {
+        if (c.auto_ok) sic.push_back(c.auto_time / c.siconos);
+        else ++sic_missed;
+      }
+      if (!std::isnan(c.peer) && c.auto_ok) peer.push_back(c.auto_time / c.peer);
+    }
+    md << "| " << fmt(tol) << " | " << problems << " | " << fmt(geomean(own)) << " | " << fmt(worst) << " | " << over
+       << " | " << missed << " | " << fmt(geomean(sic)) << " (" << sic.size() << ") | " << sic_missed << " | "
+       << fmt(geomean(peer)) << " (" << peer.size() << ") |\n";
+  }
+  md << "\nPer problem: auto / fastest own solver (that solver), \"-\" where no own solver reached the\n"
+        "tolerance, \"MISS\" where one did and auto did not.\n\n| problem |";
+  for (double tol : opt.tolerances) md << ' ' << fmt(tol) << " |";
+  md << "\n|---|";
+  for (std::size_t i = 0; i < opt.tolerances.size(); ++i) md << "---|";
+  md << '\n';
+  for (const std::string& key : order) {
+    bool any = false;
+    for (double tol : opt.tolerances) {
+      const auto it = cells.find({key, tol});
+      any = any || (it != cells.end() && it->second.auto_ran);
+    }
+    if (!any) continue;
+    md << "| " << key << " |";
+    for (double tol : opt.tolerances) {
+      const auto it = cells.find({key, tol});
+      if (it == cells.end() || std::isnan(it->second.own)) { md << " - |"; continue; }
+      const Cell& c = it->second;
+      if (!c.auto_ok) { md << " MISS (" << c.own_name << ") |"; continue; }
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " %.2f (%s) |", c.auto_time / c.own, c.own_name.c_str());
+      md << buf;
+    }
+    md << '\n';
+  }
+  std::cerr << "work_precision: wrote the auto regret table to " << opt.regret << "\n";
+}
+
 // ---- problems -------------------------------------------------------------------------------
 
 std::vector<std::string> listDir(const std::string& dir) {
@@ -445,7 +575,7 @@ int usage(const char* msg) {
   std::cerr << "work_precision: " << msg << "\n"
             << "usage: work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]\n"
                "       [--families fc3d,lcp,scenes] [--filter SUBSTRING] [--solvers a,b]\n"
-               "       [--tolerances 1e-2,1e-4,...] [--quick]\n";
+               "       [--tolerances 1e-2,1e-4,...] [--quick] [--regret FILE]\n";
   return 2;
 }
 
@@ -463,6 +593,7 @@ int main(int argc, char** argv) {
       if (a == "--problems") opt.problems_dir = value();
       else if (a == "--scenes") opt.scenes_dir = value();
       else if (a == "--out") opt.out = value();
+      else if (a == "--regret") opt.regret = value();
       else if (a == "--budget") opt.budget = std::stod(value());
       else if (a == "--filter") opt.filter = value();
       else if (a == "--tolerances") {
@@ -530,6 +661,7 @@ int main(int argc, char** argv) {
     std::cerr << bp.family << "/" << bp.name << " (" << bp.problem.contacts.size() << " contacts): "
               << std::chrono::duration<double>(Clock::now() - t0).count() << " s\n";
   }
+  writeRegret(opt, g_rows);
   std::cerr << "work_precision: " << problems.size() << " problems in "
             << std::chrono::duration<double>(Clock::now() - start).count() << " s, wrote " << opt.out << "\n";
   return 0;

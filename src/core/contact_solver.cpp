@@ -169,12 +169,19 @@ bool failedToRun(SolveStatus status) {
 // (summed over every slice) or time_budget (a slice gets at most half the remaining time
 // while another member is left) ends the solve.
 
-constexpr double kAutoTightTolerance = 1e-4;   // below: a superlinear method pays off
+constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pays off
 constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
 constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
 constexpr int kAutoNewtonRowsTight = 1000;
 constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up to this size
 constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
+constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W metric): same body pair
+constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
+constexpr int kAutoLemkeRows = 1000;
+// Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
+// below this coupling. Chosen between the generated scenes' sphere piles (κ ≈ 1.8, where
+// nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
+constexpr double kAutoSparseGs = 2.0;           // LCPs up to this size may start with Lemke
 constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
 
 struct AutoFeatures {
@@ -182,50 +189,82 @@ struct AutoFeatures {
   double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
   bool rank_deficient = false;  // active rows > 6 × bodies (body form only)
   bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
+  bool sparse = false;          // block-sparse W
+  bool symmetric = false;       // W = Wᵀ (to round-off); computed for LCPs only
 };
 
-double normalCoupling(const SolveContext& ctx) {
+// The normal coupling κ (above) and the fraction of contacts whose normal row is nearly
+// parallel to another's in the W metric (|W_ij| >= kAutoRedundant √(W_ii W_jj)): several
+// contacts between the same two bodies (a face on a face), i.e. more rows than the bodies'
+// DoF can tell apart, the rank-deficiency estimate when the bodies are not known.
+struct Coupling {
+  double kappa = 0.0;
+  double redundant = 0.0;
+};
+
+Coupling normalCoupling(const SolveContext& ctx) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
-  std::vector<double> off_sum(nc, 0.0);
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {
+  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0);
+  std::vector<bool> redundant(nc, false);
+  const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
+  for (int i = 0; i < nc; ++i)
+    diag[i] = dense ? (*dense)(ctx.offsets[i], ctx.offsets[i]) : diagonalBlock(p.W, ctx.offsets[i], 1)(0, 0);
+  auto visit = [&](int i, int j, double w) {
+    off_sum[i] += std::abs(w);
+    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j])) redundant[i] = true;
+  };
+  if (dense) {
     for (int j = 0; j < nc; ++j) {
       if (ctx.ignored[j]) continue;
       for (int i = 0; i < nc; ++i)
-        if (i != j && !ctx.ignored[i]) off_sum[i] += std::abs((*dense)(ctx.offsets[i], ctx.offsets[j]));
+        if (i != j && !ctx.ignored[i]) visit(i, j, (*dense)(ctx.offsets[i], ctx.offsets[j]));
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
     for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
       if (ctx.ignored[i]) continue;
       for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
         const int j = sparse->block_col[b];
-        if (j != i && !ctx.ignored[j]) off_sum[i] += std::abs(sparse->values[sparse->value_start[b]]);
+        if (j != i && !ctx.ignored[j]) visit(i, j, sparse->values[sparse->value_start[b]]);
       }
     }
   }
   double sum = 0.0;
-  int active = 0;
+  int active = 0, repeated = 0;
   for (int i = 0; i < nc; ++i) {
-    if (ctx.ignored[i]) continue;
-    const double w = std::get_if<Eigen::MatrixXd>(&p.W) ? std::get<Eigen::MatrixXd>(p.W)(ctx.offsets[i], ctx.offsets[i])
-                                                         : diagonalBlock(p.W, ctx.offsets[i], 1)(0, 0);
-    if (w <= 0.0) continue;  // Gauss-Seidel cannot use this row at all (zero_diagonal)
-    sum += off_sum[i] / w;
+    if (ctx.ignored[i] || diag[i] <= 0.0) continue;  // no diagonal: Gauss-Seidel cannot use the row
+    sum += off_sum[i] / diag[i];
+    repeated += redundant[i] ? 1 : 0;
     ++active;
   }
-  return active > 0 ? sum / active : 0.0;
+  Coupling c;
+  if (active > 0) {
+    c.kappa = sum / active;
+    c.redundant = static_cast<double>(repeated) / active;
+  }
+  return c;
 }
 
 AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
-  if (!f.body_form) f.coupling = normalCoupling(ctx);
+  if (!f.body_form) {
+    const Coupling c = normalCoupling(ctx);
+    f.coupling = c.kappa;
+    f.rank_deficient = c.redundant >= kAutoRedundantShare;
+  }
+  f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
+  if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
+    const Eigen::MatrixXd W = toDense(ctx.problem->W);
+    const double scale = W.cwiseAbs().maxCoeff();
+    f.symmetric = (W - W.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (scale > 0.0 ? scale : 1.0);
+  }
   if (body_dof > 0) {
     int active_rows = 0;
     for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i)
       if (!ctx.ignored[i]) active_rows += ctx.problem->contacts[i].rows;
-    f.rank_deficient = active_rows > body_dof;
+    f.rank_deficient = f.rank_deficient || active_rows > body_dof;
   }
   return f;
 }
@@ -234,7 +273,15 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
-  if (!ctx.hasFriction()) return {K::kPgs, K::kNewton, K::kApgd};
+  if (!ctx.hasFriction() && f.body_form) return {K::kPgs, K::kNewton, K::kApgd};  // unbuilt first: no W
+  if (!ctx.hasFriction()) {
+    // An LCP: projected Gauss-Seidel converges for a symmetric W with positive diagonal;
+    // otherwise (or coupled) Lemke's pivoting is exact and, up to a dense tableau of
+    // kAutoLemkeRows, cheap.
+    if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
+    if (f.symmetric && f.coupling < kAutoDominant) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
+    return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
+  }
   if (pyramidModel(p)) return {K::kPgs, K::kLemke};
   if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
@@ -244,6 +291,12 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
   }
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
   if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
+  // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
+  // row), so the first-order methods go first and newton/prox take over when they stall.
+  if (f.sparse && f.rows > kAutoNewtonRows) {
+    if (f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  }
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
   if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   return {K::kApgd, K::kProx, K::kNewton, K::kNlgs};
@@ -297,6 +350,11 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
   double best_residual = pyramid ? std::numeric_limits<double>::infinity() : ctx.residual(lambda);
   if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
+  if (by_residual && best_residual <= params.tolerance) {  // the (warm) start is an answer: path "auto"
+    report.status = SolveStatus::kConverged;
+    report.solver_error = best_residual;
+    return report;
+  }
   double best_error = best_residual;
   FrictionModel best_model = FrictionModel::kCoulombDisc;
   SolveStatus last_failure = SolveStatus::kMaxIterations;
@@ -330,7 +388,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     report.history.insert(report.history.end(), r.history.begin(), r.history.end());
     used += r.iterations;
     const double start_residual = best_residual;
-    double residual = !x.allFinite() ? std::numeric_limits<double>::infinity() : pyramid ? r.solver_error : ctx.residual(x);
+    // With the residual rule every kernel's solver_error is the residual of what it returned
+    // (a pyramid's own residual for a pyramid); otherwise measure it.
+    const bool own_measure = (by_residual || pyramid) && !failedToRun(r.status) && std::isfinite(r.solver_error);
+    double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()
+                      : own_measure  ? r.solver_error
+                                     : ctx.residual(x);
     if (!std::isfinite(residual)) residual = std::numeric_limits<double>::infinity();
     const bool converged = r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
     if (residual < best_residual || converged) {
