@@ -103,6 +103,7 @@ std::string readSolverParams(const ros::NodeHandle& pnh, lcs::SolverParams* p) {
            readParam(pnh, "sor", &p->sor), readParam(pnh, "time_budget", &p->time_budget),
            readParam(pnh, "erp", &p->erp), readParam(pnh, "softness", &p->softness),
            readParam(pnh, "time_step", &p->time_step), readConstraintLevel(pnh, p),
+           readParam(pnh, "islands", &p->islands), readParam(pnh, "threads", &p->threads),
            readSolverKind(pnh, p), readStoppingRule(pnh, p), readFrictionModel(pnh, p)}) {
     if (!error.empty()) return error;
   }
@@ -195,6 +196,8 @@ const std::vector<OverrideField>& overrideFields() {
       {"erp", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->erp); }},
       {"softness", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->softness); }},
       {"time_step", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->time_step); }},
+      {"islands", "true or false", [](const std::string& v, lcs::SolverParams* p) { return parseBool(v, &p->islands); }},
+      {"threads", "an integer", [](const std::string& v, lcs::SolverParams* p) { return parseInt(v, &p->threads); }},
       {"constraint_level", std::string("one of ") + kConstraintLevelChoices,
        [](const std::string& v, lcs::SolverParams* p) { return lcs::parseConstraintLevel(v, &p->constraint_level); }},
   };

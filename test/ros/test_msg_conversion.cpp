@@ -478,6 +478,10 @@ TEST(SolverParamsRos, OverridesTrimSpacesAroundNameAndValue) {
   EXPECT_EQ(p.maxIt, 42);
   EXPECT_EQ(applyOverride("solver = newton", &p), "");
   EXPECT_EQ(p.solver, lcs::SolverKind::kNewton);
+  EXPECT_EQ(applyOverride("islands=false", &p), "");
+  EXPECT_FALSE(p.islands);
+  EXPECT_EQ(applyOverride("threads=1", &p), "");
+  EXPECT_EQ(p.threads, 1);
   EXPECT_NE(applyOverride(" = 3", &p).find("'' is not a solver parameter"), std::string::npos);
   EXPECT_NE(applyOverride("maxIt = ", &p).find("an integer"), std::string::npos);
 }
