@@ -179,7 +179,7 @@ constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W m
 constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
 constexpr int kAutoLemkeRows = 1000;
 // Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
-// below this coupling. Chosen between the generated scenes' sphere piles (κ ≈ 1.8, where
+// below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles (κ ≈ 1.8, where
 // nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;           // LCPs up to this size may start with Lemke
 constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
@@ -256,9 +256,17 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
   if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
-    const Eigen::MatrixXd W = toDense(ctx.problem->W);
-    const double scale = W.cwiseAbs().maxCoeff();
-    f.symmetric = (W - W.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (scale > 0.0 ? scale : 1.0);
+    const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W);
+    const Eigen::MatrixXd W = dense ? Eigen::MatrixXd() : toDense(ctx.problem->W);
+    const Eigen::MatrixXd& M = dense ? *dense : W;
+    const double tol = 1e-12 * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
+    f.symmetric = true;
+    for (Eigen::Index j = 0; j < M.cols() && f.symmetric; ++j)
+      for (Eigen::Index i = j + 1; i < M.rows(); ++i)
+        if (std::abs(M(i, j) - M(j, i)) > tol) {
+          f.symmetric = false;
+          break;
+        }
   }
   if (body_dof > 0) {
     int active_rows = 0;
@@ -285,6 +293,9 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
   if (pyramidModel(p)) return {K::kPgs, K::kLemke};
   if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
+  // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
+  // Gauss-Seidel first at any tolerance and size.
+  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
     if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
     return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
@@ -293,10 +304,7 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
   if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
-  if (f.sparse && f.rows > kAutoNewtonRows) {
-    if (f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
-  }
+  if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
   if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   return {K::kApgd, K::kProx, K::kNewton, K::kNlgs};
