@@ -709,6 +709,15 @@ SolveResult ContactSolver::solve(const Problem& input) {
                       frictionModelName(params_.friction_model) + " applies to pgs and lemke; " +
                       result.solver + " solved the Coulomb disc";
   }
+  if (result.friction_model != FrictionModel::kCoulombDisc && result.converged) {
+    // "converged" is about the law that was solved; say so, since `residual` (Coulomb's
+    // disc) stays large wherever a pyramid corner lets friction exceed μ λ_n.
+    std::ostringstream note;
+    note << "converged on the " << frictionModelName(result.friction_model) << " friction law (its residual "
+         << result.solver_error << " <= tolerance); residual " << result.residual
+         << " is the distance to Coulomb's disc, nonzero by design";
+    result.message += std::string(result.message.empty() ? "" : "; ") + note.str();
+  }
   result.residual_history = std::move(report.history);
   result.unbuilt = unbuilt;
   if (!params_.build_lcp) {
@@ -758,6 +767,7 @@ const char* stateName(ContactState state) {
     case ContactState::kStick: return "stick";
     case ContactState::kSlip: return "slip";
     case ContactState::kIgnored: return "ignored";
+    case ContactState::kClosed: return "closed";
   }
   return "unknown";
 }

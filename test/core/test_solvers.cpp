@@ -492,6 +492,10 @@ TEST(Pyramid, BoxOnInclineSticksUpToThePyramidThreshold) {
         EXPECT_GT(slide.residual, 1e-3);  // ... the disc is not, by design
         EXPECT_GT(stick.residual, 1e-3);  // (it sticks where the disc would slide)
       }
+      // "converged" names the law it holds for, and what the disc residual means then.
+      const std::string law = std::string("converged on the ") + frictionModelName(c.model) + " friction law";
+      EXPECT_NE(slide.message.find(law), std::string::npos) << slide.message;
+      EXPECT_NE(slide.message.find("distance to Coulomb's disc"), std::string::npos) << slide.message;
     }
   }
   // The disc slides at μ in every direction.
