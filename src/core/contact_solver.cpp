@@ -157,15 +157,21 @@ bool failedToRun(SolveStatus status) {
 // the friction law and contact types (what each kernel can solve), the tolerance (Gauss-
 // Seidel and APGD converge linearly or sublinearly, Newton superlinearly), the size (a
 // Newton step factorizes, a sweep or an APGD iteration is one pass over W), the storage
-// (body form: Gauss-Seidel runs unbuilt) and two estimates of how hard W is for Gauss-
-// Seidel: the normal coupling (mean over contacts of Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is
-// diagonally dominant on the normal rows and Gauss-Seidel contracts fast) and, when the body
-// form is known, whether the active rows exceed the bodies' 6 DoF each (W singular).
+// (body form: Gauss-Seidel runs unbuilt; block-sparse: a Newton step is a sparse LU), for
+// LCPs W's symmetry (pgs converges for symmetric W, Lemke does not need it), and two
+// estimates of how hard W is for Gauss-Seidel: the normal coupling κ (mean over contacts of
+// Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is diagonally dominant on the normal rows) and rank
+// deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
+// quarter of the contacts with a nearly parallel partner). The start is measured first: a
+// warm start that already meets the tolerance runs no member.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
 // zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
-// progresses continues with a doubled slice. Members rotate until the tolerance, maxIt
+// progresses continues with a doubled slice; once every member ran, a stall hands over to
+// the member with the fastest residual decrease per second, and a member that could not
+// move from the best iterate at all gets one slice from the warm start instead. Members
+// rotate until the tolerance, maxIt
 // (summed over every slice) or time_budget (a slice gets at most half the remaining time
 // while another member is left) ends the solve.
 
@@ -177,17 +183,17 @@ constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up
 constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
 constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W metric): same body pair
 constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
-constexpr int kAutoLemkeRows = 1000;
+constexpr int kAutoLemkeRows = 1000;           // LCPs up to this size may start with Lemke
 // Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
-// below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles (κ ≈ 1.8, where
-// nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
-constexpr double kAutoSparseGs = 2.0;           // LCPs up to this size may start with Lemke
+// below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
+// (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
+constexpr double kAutoSparseGs = 2.0;
 constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
 
 struct AutoFeatures {
   int rows = 0;
   double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
-  bool rank_deficient = false;  // active rows > 6 × bodies (body form only)
+  bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
   bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
   bool sparse = false;          // block-sparse W
   bool symmetric = false;       // W = Wᵀ (to round-off); computed for LCPs only
