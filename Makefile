@@ -17,7 +17,7 @@ export ROS_HOME := $(abspath $(BUILD_DIR))/ros_home
 export ROS_LOG_DIR := $(ROS_HOME)/log
 
 .PHONY: all deps configure build test test-asan fuzz demo bench soak stabilization clean \
-        bench8 bench8-configure effects-cost scaling latency
+        bench-runtime bench-runtime-configure effects-cost scaling latency
 
 all: build
 
@@ -131,38 +131,38 @@ stabilization: configure
 	@mkdir -p bench/results
 	$(DEVEL_DIR)/lib/lcp_contact_solver/stabilization_tradeoff --out bench/results/stabilization.csv
 
-# Issue #8 benchmarks (docs/BENCHMARKS.md "Paying only for what a scene uses", "Scaling",
+# Runtime benchmarks (docs/BENCHMARKS.md "Paying only for what a scene uses", "Scaling",
 # "Latency and rate"): in-process effect costs and scaling, then the live node/nodelet round
-# trip (bench/latency.sh: private roscore, stops what it starts). Built in BENCH8_BUILD_DIR
+# trip (bench/latency.sh: private roscore, stops what it starts). Built in BENCH_RUNTIME_BUILD_DIR
 # (only these targets); CSVs in bench/results/. Not part of `make test`. Each can run alone:
 #   make effects-cost EFFECTS_ARGS="--bases 5 --balls 40"   make scaling SCALING_ARGS="--bases 2,5 --balls 4,40"
 #   make latency LATENCY_ARGS="--modes node --count 100"
-BENCH8_BUILD_DIR ?= build/bench-runtime
-BENCH8_BIN = $(BENCH8_BUILD_DIR)/devel/lib/lcp_contact_solver
+BENCH_RUNTIME_BUILD_DIR ?= build/bench-runtime
+BENCH_RUNTIME_BIN = $(BENCH_RUNTIME_BUILD_DIR)/devel/lib/lcp_contact_solver
 EFFECTS_ARGS ?=
 SCALING_ARGS ?=
 LATENCY_ARGS ?=
-bench8: effects-cost scaling latency
+bench-runtime: effects-cost scaling latency
 
-bench8-configure:
+bench-runtime-configure:
 	@scripts/install-deps
-	cmake -S . -B $(BENCH8_BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BENCH_RUNTIME_BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
 
-effects-cost: bench8-configure
-	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target effects_cost
+effects-cost: bench-runtime-configure
+	cmake --build $(BENCH_RUNTIME_BUILD_DIR) -j$(JOBS) --target effects_cost
 	@mkdir -p bench/results
-	$(BENCH8_BIN)/effects_cost --out bench/results/effects_cost.csv $(EFFECTS_ARGS) >bench/results/effects_cost.log
+	$(BENCH_RUNTIME_BIN)/effects_cost --out bench/results/effects_cost.csv $(EFFECTS_ARGS) >bench/results/effects_cost.log
 	@cat bench/results/effects_cost.log
 
-scaling: bench8-configure
-	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target scaling_bench
+scaling: bench-runtime-configure
+	cmake --build $(BENCH_RUNTIME_BUILD_DIR) -j$(JOBS) --target scaling_bench
 	@mkdir -p bench/results
-	$(BENCH8_BIN)/scaling_bench --out bench/results/scaling.csv $(SCALING_ARGS) >bench/results/scaling.log
+	$(BENCH_RUNTIME_BIN)/scaling_bench --out bench/results/scaling.csv $(SCALING_ARGS) >bench/results/scaling.log
 	@cat bench/results/scaling.log
 
-latency: bench8-configure
-	cmake --build $(BENCH8_BUILD_DIR) -j$(JOBS) --target latency_bench
-	bench/latency.sh --build $(BENCH8_BUILD_DIR) $(LATENCY_ARGS)
+latency: bench-runtime-configure
+	cmake --build $(BENCH_RUNTIME_BUILD_DIR) -j$(JOBS) --target latency_bench
+	bench/latency.sh --build $(BENCH_RUNTIME_BUILD_DIR) $(LATENCY_ARGS)
 
 clean:
 	rm -rf $(BUILD_DIR) $(DEVEL_DIR)

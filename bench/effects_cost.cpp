@@ -8,7 +8,7 @@
 // sphere_pile's), generated with the scenes' torsional_friction and rolling_friction set (in
 // a copy of their YAML files), so every contact is a 6-row rolling contact. Every variant
 // below is derived from that one problem by keeping the leading rows of each contact
-// (bench8_util.h deriveProblem): the same geometry, the same W and d_free on the rows kept —
+// (timing_util.h deriveProblem): the same geometry, the same W and d_free on the rows kept —
 // exactly what the scene builds when its pairs ask for fewer rows.
 //
 //   (a) mu0.5        3-row frictional contacts, μ = 0.5 (the reference, "all frictional")
@@ -20,7 +20,7 @@
 //
 // Each is solved cold by nlgs and by auto: per sweep (25 sweeps from a cold start, SOFA rule
 // at an unreachable tolerance, the whole solve divided by 25; the marginal sweep without the
-// setup is in the CSV; bench8_util.h sweepRound) and to a tolerance (nlgs at 1e-4, auto at
+// setup is in the CSV; timing_util.h sweepRound) and to a tolerance (nlgs at 1e-4, auto at
 // 1e-4 and 1e-6; wall-clock budget --budget s). The variants of a problem are measured in
 // --rounds interleaved rounds and each figure is the fastest over the rounds.
 //
@@ -32,11 +32,11 @@
 //       friction_pairs (a mixed scene), with the broadphase pairs, skipped pairs and
 //       narrowphase tests of ContactGenerationStats.
 //
-// Times are CPU time of the benchmark's thread (bench8_util.h: the machine is shared), the
+// Times are CPU time of the benchmark's thread (timing_util.h: the machine is shared), the
 // fastest of the repeats. CSV: one row per measurement (section, problem, variant, sizes,
 // solver, mode, tolerance, iterations, seconds, µs per sweep, residual, status, generation
 // counters, 1-min load; step_solve_wall is the core's wall-clock solve time of step()).
-#include "bench8_util.h"
+#include "timing_util.h"
 #include "scene_problems.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"
@@ -195,23 +195,16 @@ void measureProblem(const std::string& problem_name, const std::vector<Variant>&
   const std::size_t nv = variants.size();
   std::vector<std::array<lcs_bench::SweepAcc, 2>> sweep_acc(nv);
   std::vector<std::array<lcs_bench::SolveAcc, 3>> tol_acc(nv);
-  for (int round = 0; round < rounds; ++round)
-    for (std::size_t i = 0; i < nv; ++i) {
-      for (int k = 0; k < 2; ++k) {
-        lcs::SolverParams params;
-        params.solver = kSweepSolvers[k];
-        lcs_bench::sweepRound(variants[i].problem, params, sweeps, &sweep_acc[i][k]);
-      }
-      for (int k = 0; k < 3; ++k) {
-        lcs::SolverParams params;
-        params.solver = kToTol[k].kind;
-        params.tolerance = kToTol[k].tol;
-        params.maxIt = 100000;
-        params.time_budget = budget;
-        params.initial_guess = false;
-        lcs_bench::solveRound(variants[i].problem, params, &tol_acc[i][k]);
-      }
+  lcs_bench::interleavedRounds(rounds, nv, [&](std::size_t i) {
+    for (int k = 0; k < 2; ++k) {
+      lcs::SolverParams params;
+      params.solver = kSweepSolvers[k];
+      lcs_bench::sweepRound(variants[i].problem, params, sweeps, &sweep_acc[i][k]);
     }
+    for (int k = 0; k < 3; ++k)
+      lcs_bench::solveRound(variants[i].problem, lcs_bench::toleranceParams(kToTol[k].kind, kToTol[k].tol, budget, 100000),
+                            &tol_acc[i][k]);
+  });
   for (std::size_t i = 0; i < nv; ++i) {
     const Variant& v = variants[i];
     const lcs::Problem& p = v.problem;
@@ -393,19 +386,20 @@ std::vector<GenRow> measureGeneration(const std::string& scenes_dir, int n, int 
   std::vector<GenRow> rows = {{"all_pairs", {}}, {"ball_ball_disabled", {}}, {"mixed_friction_pairs", {}}};
   const sc::Scene* scenes[3] = {&settled, &disabled, &mixed};
   const int rounds = 5;
-  for (int round = 0; round < rounds; ++round)
-    for (int k = 0; k < 3; ++k) {
-      const GenTiming g = timeGeneration(*scenes[k], std::max(1, reps / rounds));
-      if (round == 0) {
-        rows[k].t = g;
-        continue;
-      }
-      GenTiming& t = rows[k].t;
-      t.generate = std::min(t.generate, g.generate);
-      t.build = std::min(t.build, g.build);
-      t.step = std::min(t.step, g.step);
-      t.step_solve = std::min(t.step_solve, g.step_solve);
+  bool first[3] = {true, true, true};
+  lcs_bench::interleavedRounds(rounds, 3, [&](std::size_t k) {
+    const GenTiming g = timeGeneration(*scenes[k], std::max(1, reps / rounds));
+    if (first[k]) {
+      rows[k].t = g;
+      first[k] = false;
+      return;
     }
+    GenTiming& t = rows[k].t;
+    t.generate = std::min(t.generate, g.generate);
+    t.build = std::min(t.build, g.build);
+    t.step = std::min(t.step, g.step);
+    t.step_solve = std::min(t.step_solve, g.step_solve);
+  });
   return rows;
 }
 

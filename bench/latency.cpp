@@ -27,7 +27,7 @@
 // node's whole cycle from messages to the ConstraintForces message), the serialization of
 // the messages both ways, and buildMarkers. Node CPU from /proc/<solver-pid>/stat per phase.
 // Appends CSV rows (header when the file is new).
-#include "bench8_util.h"
+#include "timing_util.h"
 #include "scene_problems.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"

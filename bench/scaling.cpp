@@ -14,7 +14,7 @@
 //   unbuilt       the body form (Problem::bodies, SolverParams::build_lcp = false): no W
 // Per form: bytes of the compliance, time per nlgs sweep (25 sweeps from a cold start, SOFA
 // rule at an unreachable tolerance: the whole solve / 25, and the marginal sweep (t(25) -
-// t(5)) / 20 with the setup t(5) - 5 marginal sweeps; bench8_util.h sweepRound), and time to a
+// t(5)) / 20 with the setup t(5) - 5 marginal sweeps; timing_util.h sweepRound), and time to a
 // residual of 1e-4 and 1e-6 with auto (built: nlgs at 1e-4, newton ≤ 200 rows / apgd above at
 // 1e-6; unbuilt: nlgs) within a wall-clock budget (--budget s, maxIt 10^6). The forms of a
 // problem are measured in --rounds interleaved rounds, the fastest counts. When some contact
@@ -23,9 +23,9 @@
 // Bandwidth: the machine's single-thread read bandwidth, measured here (sum of a --array-mb
 // array of doubles with 8 accumulators, fastest of 5 passes, before and after), and the
 // ratio dense sweep / (bytes of W / bandwidth): 1 means a sweep costs exactly one read of W.
-// Times are CPU time of the benchmark's thread (bench8_util.h: the machine is shared), the
+// Times are CPU time of the benchmark's thread (timing_util.h: the machine is shared), the
 // fastest of the repeats.
-#include "bench8_util.h"
+#include "timing_util.h"
 #include "scene_problems.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
@@ -201,29 +201,23 @@ int main(int argc, char** argv) {
       for (lcs::Contact& c : plain[i].contacts) c.erp = 0.0;
     }
 
-    // Every measurement of every form, in interleaved rounds (bench8_util.h); fastest counts.
+    // Every measurement of every form, in interleaved rounds (timing_util.h); fastest counts.
     const int sweeps = 20;  // 5 + 20 sweeps from a cold start, the whole solve divided
     const double tols[2] = {1e-4, 1e-6};
     std::vector<lcs_bench::SweepAcc> sweep_acc(forms.size()), plain_acc(forms.size());
     std::vector<std::array<lcs_bench::SolveAcc, 2>> tol_acc(forms.size());
-    for (int round = 0; round < o.rounds; ++round)
-      for (std::size_t i = 0; i < forms.size(); ++i) {
-        lcs::SolverParams params;
-        params.solver = lcs::SolverKind::kNlgs;
-        params.build_lcp = forms[i].build_lcp;
-        lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
-        if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
-        for (int k = 0; k < 2; ++k) {
-          lcs::SolverParams p;
-          p.solver = lcs::SolverKind::kAuto;
-          p.build_lcp = forms[i].build_lcp;
-          p.tolerance = tols[k];
-          p.maxIt = 1000000;
-          p.time_budget = o.budget;
-          p.initial_guess = false;
-          lcs_bench::solveRound(*forms[i].problem, p, &tol_acc[i][k]);
-        }
+    lcs_bench::interleavedRounds(o.rounds, forms.size(), [&](std::size_t i) {
+      lcs::SolverParams params;
+      params.solver = lcs::SolverKind::kNlgs;
+      params.build_lcp = forms[i].build_lcp;
+      lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
+      if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
+      for (int k = 0; k < 2; ++k) {
+        lcs::SolverParams p = lcs_bench::toleranceParams(lcs::SolverKind::kAuto, tols[k], o.budget, 1000000);
+        p.build_lcp = forms[i].build_lcp;
+        lcs_bench::solveRound(*forms[i].problem, p, &tol_acc[i][k]);
       }
+    });
     for (std::size_t i = 0; i < forms.size(); ++i) {
       const Form& f = forms[i];
       const lcs_bench::SweepTiming st = lcs_bench::sweepTiming(sweep_acc[i]);

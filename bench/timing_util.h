@@ -1,7 +1,8 @@
-// Helpers shared by the issue #8 benchmarks (bench/effects_cost.cpp, bench/scaling.cpp,
-// bench/latency.cpp): timing, the machine's load, the bytes of a compliance, and taking a
-// sub-problem on the same geometry (fewer rows per contact, other types and μ). Header-only,
-// benchmarks only (never a test).
+// Timing helpers of the runtime benchmarks (`make bench-runtime`: bench/effects_cost.cpp,
+// bench/scaling.cpp, bench/latency.cpp): CPU-time measurement in interleaved rounds (the
+// fastest counts), the machine's load, the bytes of a compliance, and taking a sub-problem
+// on the same geometry (fewer rows per contact, other types and μ). Header-only, benchmarks
+// only (never a test).
 #pragma once
 
 #include "lcp_contact_solver/core/body_compliance.h"
@@ -209,6 +210,28 @@ inline SweepTiming sweepTiming(const SweepAcc& acc) {
     out.setup = std::max(0.0, acc.best_short - acc.it_short * out.marginal);
   }
   return out;
+}
+
+// Calls measure(i) for every variant i, `rounds` times over, the variants interleaved within
+// a round: a slow spell of the shared machine then falls on every variant instead of one.
+// The accumulators measure(i) feeds (SweepAcc, SolveAcc) keep the fastest run.
+template <class Measure>
+void interleavedRounds(int rounds, std::size_t variants, Measure&& measure) {
+  for (int round = 0; round < rounds; ++round)
+    for (std::size_t i = 0; i < variants; ++i) measure(i);
+}
+
+// Parameters of a cold solve to `tolerance` (no warm start), capped by `time_budget` s and
+// `max_iterations`, for solveRound.
+inline lcs::SolverParams toleranceParams(lcs::SolverKind solver, double tolerance, double time_budget,
+                                         int max_iterations) {
+  lcs::SolverParams params;
+  params.solver = solver;
+  params.tolerance = tolerance;
+  params.maxIt = max_iterations;
+  params.time_budget = time_budget;
+  params.initial_guess = false;
+  return params;
 }
 
 // A solve to a tolerance, in rounds like sweepRound: one run per round (none once a run took
