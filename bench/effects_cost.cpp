@@ -313,7 +313,7 @@ GenTiming timeGeneration(const sc::Scene& settled, int reps) {
     std::vector<double> t;
     for (int k = 0; k < reps; ++k) {
       const double c0 = lcs_bench::threadCpuSeconds();
-      const std::vector<sc::ContactFrame> frames = gen.generate();
+      const std::vector<sc::SceneContact> frames = gen.generate();
       t.push_back(lcs_bench::threadCpuSeconds() - c0);
       g.contacts = static_cast<int>(frames.size());
     }
@@ -373,7 +373,7 @@ std::vector<GenRow> measureGeneration(const std::string& scenes_dir, int n, int 
   {
     sc::ContactGenerator gen(settled);
     std::set<std::pair<int, int>> touching;
-    for (const sc::ContactFrame& f : gen.generate())
+    for (const sc::SceneContact& f : gen.generate())
       if (!settled.bodies[f.body_a].is_static && !settled.bodies[f.body_b].is_static)
         touching.emplace(f.body_a, f.body_b);
     int k = 0;

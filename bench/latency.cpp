@@ -132,31 +132,16 @@ double cpuSeconds(int pid) {
   return (utime + stime) / sysconf(_SC_CLK_TCK);
 }
 
+// Every contact at the origin with normal +z and that normal's rule tangents, given
+// explicitly (a default ContactFrame): the geometry does not enter the solve.
 lcs::ContactArray toArrayMsg(const lcs::Problem& p) {
-  lcs::ContactArray msg;
-  msg.header.frame_id = "world";
-  const std::vector<int> off = p.rowOffsets();
-  msg.contacts.resize(p.contacts.size());
-  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
-    const lcs::Contact& c = p.contacts[i];
-    lcs::ContactPoint& m = msg.contacts[i];
-    m.id = c.id;
-    m.body_a = "body_" + std::to_string(c.id >> 40);
-    m.body_b = "body_" + std::to_string((c.id >> 16) & 0xFFFFFF);
-    m.normal.z = 1.0;
-    m.tangent1.y = 1.0;   // the derived tangents of +z (README, "Conventions")
-    m.tangent2.x = -1.0;
-    m.d_free.assign(p.d_free.data() + off[i], p.d_free.data() + off[i + 1]);
-    m.mu = c.mu;
-    m.type = static_cast<std::uint8_t>(c.type);
-    m.mu_torsional = c.mu_torsional;
-    m.mu_rolling = c.mu_rolling;
-    m.rows = static_cast<std::uint32_t>(c.rows);
-    m.gap = c.gap;
-    m.erp = c.erp;
-    m.softness = c.softness;
-  }
-  return msg;
+  std_msgs::Header header;
+  header.frame_id = "world";
+  std::vector<lros::ContactBodies> bodies(p.contacts.size());
+  for (std::size_t i = 0; i < p.contacts.size(); ++i)
+    bodies[i] = {"body_" + std::to_string(p.contacts[i].id >> 40),
+                 "body_" + std::to_string((p.contacts[i].id >> 16) & 0xFFFFFF)};
+  return lros::toContactArrayMsg(p, std::vector<lros::ContactFrame>(p.contacts.size()), bodies, header);
 }
 
 template <class M>

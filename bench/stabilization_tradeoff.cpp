@@ -79,7 +79,7 @@ Row run(const Options& o, double erp, double softness) {
     row.mean_sweeps /= counted;
     row.mean_solve_ms /= counted;
   }
-  for (const scene::ContactFrame& f : sim.lastProblem().frames) row.max_depth = std::max(row.max_depth, f.depth);
+  for (const scene::SceneContact& f : sim.lastProblem().frames) row.max_depth = std::max(row.max_depth, f.depth);
   for (const scene::RigidBody& b : sim.scene().bodies)
     if (!b.is_static) row.max_speed = std::max(row.max_speed, b.linear_velocity.norm());
   return row;

@@ -1,6 +1,7 @@
 #include "lcp_contact_solver/ros/markers.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
+#include "lcp_contact_solver/ros/msg_primitives.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,25 +12,8 @@ namespace {
 
 constexpr int kConeSegments = 12;
 
-std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f) {
-  std_msgs::ColorRGBA c;
-  c.r = r;
-  c.g = g;
-  c.b = b;
-  c.a = a;
-  return c;
-}
-
 // Force arrows: magenta, apart from every state colour and every body colour.
 const std_msgs::ColorRGBA kForceArrowColor = rgba(1.0f, 0.0f, 1.0f);
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
 
 visualization_msgs::Marker baseMarker(const std_msgs::Header& header, const char* ns, int id, int type,
                                       const DisplayOptions& options) {

@@ -1,9 +1,8 @@
 #include "lcp_contact_solver/ros/msg_conversion.h"
 
-#include "lcp_contact_solver/core/contact_frame.h"
-
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/ros/msg_primitives.h"
 
 #include <Eigen/Geometry>
 
@@ -27,24 +26,13 @@ constexpr double kOrthogonalityTolerance = 1e-3;
 // Bounds the allocation a hostile message can cause when max_rows is 0 (no limit).
 constexpr std::int64_t kHardRowLimit = 1000000;
 
-Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v) { return {v.x, v.y, v.z}; }
-Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
-
-geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v) {
-  geometry_msgs::Vector3 out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& v) {
-  geometry_msgs::Point out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
+// toMsgType / fromMsgType are casts because the numbers agree; this keeps them agreeing.
+static_assert(static_cast<int>(lcs::ContactType::kFrictional) == lcs::ContactPoint::FRICTIONAL &&
+                  static_cast<int>(lcs::ContactType::kFrictionless) == lcs::ContactPoint::FRICTIONLESS &&
+                  static_cast<int>(lcs::ContactType::kBilateral) == lcs::ContactPoint::BILATERAL &&
+                  static_cast<int>(lcs::ContactType::kTorsional) == lcs::ContactPoint::TORSIONAL &&
+                  static_cast<int>(lcs::ContactType::kRolling) == lcs::ContactPoint::ROLLING,
+              "ContactPoint's type constants must equal the core's ContactType values");
 
 std::string contactName(std::size_t index, std::int64_t id) {
   return "contact " + std::to_string(index) + " (id " + std::to_string(id) + ")";
@@ -54,17 +42,10 @@ std::string contactName(std::size_t index, std::int64_t id) {
 int contactRows(const lcs::ContactPoint& c, std::string* error) {
   switch (c.type) {
     case lcs::ContactPoint::FRICTIONAL:
-    case lcs::ContactPoint::FRICTIONLESS: {
-      const int fixed = c.type == lcs::ContactPoint::FRICTIONAL ? 3 : 1;
-      if (c.rows != 0 && static_cast<int>(c.rows) != fixed) {
-        *error = "has rows=" + std::to_string(c.rows) + " but its type has " + std::to_string(fixed);
-        return -1;
-      }
-      return fixed;
-    }
+    case lcs::ContactPoint::FRICTIONLESS:
     case lcs::ContactPoint::TORSIONAL:
     case lcs::ContactPoint::ROLLING: {
-      const int fixed = c.type == lcs::ContactPoint::TORSIONAL ? 4 : 6;
+      const int fixed = lcs::rowsForType(fromMsgType(c.type));  // the core's count: 3, 1, 4, 6
       if (c.rows != 0 && static_cast<int>(c.rows) != fixed) {
         *error = "has rows=" + std::to_string(c.rows) + " but its type has " + std::to_string(fixed);
         return -1;
@@ -114,7 +95,7 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
   if (error.empty()) error = checkStabilization(msg);
   if (!error.empty()) return error;
   contact->id = msg.id;
-  contact->type = static_cast<lcs::ContactType>(msg.type);
+  contact->type = fromMsgType(msg.type);
   contact->rows = rows;
   contact->mu = msg.mu;
   contact->mu_torsional = msg.mu_torsional;
@@ -294,15 +275,11 @@ Eigen::Vector3d directionalForce(const lcs::Contact& contact, const double* lamb
   return components;
 }
 
-bool finite(const geometry_msgs::Vector3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-bool finite(const geometry_msgs::Point& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
-
 }  // namespace
+
+std::uint8_t toMsgType(lcs::ContactType type) { return static_cast<std::uint8_t>(type); }
+
+lcs::ContactType fromMsgType(std::uint8_t type) { return static_cast<lcs::ContactType>(type); }
 
 void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2) {
   lcs::tangentsFromNormal(normal, tangent1, tangent2);
@@ -342,6 +319,38 @@ std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& 
   if (error.empty()) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
+}
+
+lcs::ContactArray toContactArrayMsg(const lcs::Problem& problem, const std::vector<ContactFrame>& frames,
+                                    const std::vector<ContactBodies>& bodies, const std_msgs::Header& header) {
+  lcs::ContactArray msg;
+  msg.header = header;
+  const std::vector<int> offsets = problem.rowOffsets();
+  msg.contacts.resize(problem.contacts.size());
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const lcs::Contact& c = problem.contacts[i];
+    const ContactFrame& f = frames[i];
+    lcs::ContactPoint& out = msg.contacts[i];
+    out.id = c.id;
+    out.body_a = bodies[i].body_a;
+    out.body_b = bodies[i].body_b;
+    out.position = toPoint(f.position);
+    out.normal = toVector3(f.normal);
+    if (!f.derived_tangents) {
+      out.tangent1 = toVector3(f.tangent1);
+      out.tangent2 = toVector3(f.tangent2);
+    }
+    out.d_free.assign(problem.d_free.data() + offsets[i], problem.d_free.data() + offsets[i + 1]);
+    out.mu = c.mu;
+    out.mu_torsional = c.mu_torsional;
+    out.mu_rolling = c.mu_rolling;
+    out.gap = c.gap;
+    out.erp = c.erp;
+    out.softness = c.softness;
+    out.type = toMsgType(c.type);
+    out.rows = static_cast<std::uint32_t>(c.rows);
+  }
+  return msg;
 }
 
 lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {

@@ -1,6 +1,7 @@
 #include "lcp_contact_solver/ros/scene_msg_conversion.h"
 
 #include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_primitives.h"
 
 #include <Eigen/Geometry>
 
@@ -15,40 +16,6 @@ namespace {
 
 namespace scene = lcs::scene;
 
-geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v) {
-  geometry_msgs::Vector3 out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& v) {
-  geometry_msgs::Point out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
-
-geometry_msgs::Quaternion toQuaternion(const Eigen::Quaterniond& q) {
-  geometry_msgs::Quaternion out;
-  out.x = q.x();
-  out.y = q.y();
-  out.z = q.z();
-  out.w = q.w();
-  return out;
-}
-
-std_msgs::ColorRGBA rgba(float r, float g, float b, float a) {
-  std_msgs::ColorRGBA c;
-  c.r = r;
-  c.g = g;
-  c.b = b;
-  c.a = a;
-  return c;
-}
-
 // Muted, distinct colours for dynamic bodies (cycled). Muted so that the solver's saturated
 // contact colours (stick green, slip red, closed cyan, magenta force arrows) stand out.
 std_msgs::ColorRGBA paletteColor(int index) {
@@ -59,47 +26,14 @@ std_msgs::ColorRGBA paletteColor(int index) {
   return rgba(c[0], c[1], c[2], 1.0f);
 }
 
-std::uint8_t toMsgType(lcs::ContactType type) {
-  switch (type) {
-    case lcs::ContactType::kFrictional: return lcs::ContactPoint::FRICTIONAL;
-    case lcs::ContactType::kFrictionless: return lcs::ContactPoint::FRICTIONLESS;
-    case lcs::ContactType::kBilateral: return lcs::ContactPoint::BILATERAL;
-    case lcs::ContactType::kTorsional: return lcs::ContactPoint::TORSIONAL;
-    case lcs::ContactType::kRolling: return lcs::ContactPoint::ROLLING;
-  }
-  return lcs::ContactPoint::FRICTIONAL;
-}
-
 }  // namespace
 
 lcs::ContactArray toContactArrayMsg(const scene::StepProblem& step, const std_msgs::Header& header) {
-  lcs::ContactArray msg;
-  msg.header = header;
-  const lcs::Problem& problem = step.problem;
-  const std::vector<int> offsets = problem.rowOffsets();
-  msg.contacts.resize(step.frames.size());
-  for (std::size_t i = 0; i < step.frames.size(); ++i) {
-    const scene::ContactFrame& f = step.frames[i];
-    const lcs::Contact& c = problem.contacts[i];
-    lcs::ContactPoint& out = msg.contacts[i];
-    out.id = c.id;
-    out.body_a = f.body_a_name;
-    out.body_b = f.body_b_name;
-    out.position = toPoint(f.point);
-    out.normal = toVector3(f.normal);
-    out.tangent1 = toVector3(f.t1);
-    out.tangent2 = toVector3(f.t2);
-    out.d_free.assign(problem.d_free.data() + offsets[i], problem.d_free.data() + offsets[i + 1]);
-    out.mu = c.mu;
-    out.mu_torsional = c.mu_torsional;
-    out.mu_rolling = c.mu_rolling;
-    out.gap = c.gap;
-    out.erp = c.erp;
-    out.softness = c.softness;
-    out.type = toMsgType(c.type);
-    out.rows = static_cast<std::uint32_t>(c.rows);
-  }
-  return msg;
+  // The scene's contacts are core ContactFrames: sliced into the shared writer's input.
+  const std::vector<ContactFrame> frames(step.frames.begin(), step.frames.end());
+  std::vector<ContactBodies> bodies(step.frames.size());
+  for (std::size_t i = 0; i < step.frames.size(); ++i) bodies[i] = {step.frames[i].body_a_name, step.frames[i].body_b_name};
+  return toContactArrayMsg(step.problem, frames, bodies, header);
 }
 
 lcs::Compliance toComplianceMsg(const scene::StepProblem& step, const std_msgs::Header& header) {

@@ -22,7 +22,7 @@ std::vector<Vector6d> freeVelocities(const Scene& scene, double dt) {
   return v;
 }
 
-RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<ContactFrame>& frames) {
+RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<SceneContact>& frames) {
   body_count_ = static_cast<int>(scene.bodies.size());
   inverse_mass_.assign(scene.bodies.size(), Eigen::Matrix<double, 6, 6>::Zero());
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
@@ -35,12 +35,12 @@ RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<Conta
   contacts_.resize(frames.size());
   offsets_.assign(frames.size() + 1, 0);
   for (std::size_t c = 0; c < frames.size(); ++c) {
-    const ContactFrame& f = frames[c];
+    const SceneContact& f = frames[c];
     ContactData& cd = contacts_[c];
     cd.rows = f.rows;
     cd.gap = f.gap();
     offsets_[c + 1] = offsets_[c] + f.rows;
-    const Eigen::Vector3d dirs[3] = {f.normal, f.t1, f.t2};
+    const Eigen::Vector3d dirs[3] = {f.normal, f.tangent1, f.tangent2};
     const int bodies[2] = {f.body_a, f.body_b};
     for (int s = 0; s < 2; ++s) {
       Side& side = cd.side[s];
@@ -50,7 +50,7 @@ RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<Conta
       if (body.is_static) continue;
       side.body = bodies[s];
       const double sign = s == 0 ? 1.0 : -1.0;
-      const Eigen::Vector3d r = f.point - body.comWorld();
+      const Eigen::Vector3d r = f.position - body.comWorld();
       for (int k = 0; k < std::min(f.rows, 3); ++k) {
         side.J.block<1, 3>(k, 0) = sign * dirs[k].transpose();
         side.J.block<1, 3>(k, 3) = sign * r.cross(dirs[k]).transpose();
@@ -188,7 +188,7 @@ Eigen::MatrixXd RigidContactModel::denseInverseMass() const {
   return M;
 }
 
-std::vector<Contact> problemContacts(const Scene& scene, const std::vector<ContactFrame>& frames) {
+std::vector<Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames) {
   std::vector<Contact> contacts(frames.size());
   for (std::size_t c = 0; c < frames.size(); ++c) {
     contacts[c].id = frames[c].id;
@@ -204,7 +204,7 @@ std::vector<Contact> problemContacts(const Scene& scene, const std::vector<Conta
   return contacts;
 }
 
-Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
+Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
                      const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage) {
   const RigidContactModel model(scene, frames);
   Problem p;

@@ -1,4 +1,4 @@
-// FCL broadphase + narrowphase → ContactFrames with persistent ids (see contact_generator.h).
+// FCL broadphase + narrowphase → SceneContacts with persistent ids (see contact_generator.h).
 #include "lcp_contact_solver/scene/contact_generator.h"
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -161,7 +161,7 @@ ContactGenerator::~ContactGenerator() = default;
 
 void ContactGenerator::resetIds() { impl_->memory.clear(); }
 
-std::vector<ContactFrame> ContactGenerator::generate() {
+std::vector<SceneContact> ContactGenerator::generate() {
   Impl& im = *impl_;
   const Scene& scene = im.scene;
   last_ = ContactGenerationStats();
@@ -224,7 +224,7 @@ std::vector<ContactFrame> ContactGenerator::generate() {
   }
 
   // 3. Per pair: drop duplicates, match ids with the previous step, build frames.
-  std::vector<ContactFrame> frames;
+  std::vector<SceneContact> frames;
   std::map<PairKey, PairMemory> next_memory;
   for (auto& [key, list] : raw) {
     // Stable order of FCL's points for deterministic matching.
@@ -286,15 +286,15 @@ std::vector<ContactFrame> ContactGenerator::generate() {
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return slot[x] < slot[y]; });
     for (std::size_t i : order) {
-      ContactFrame f;
+      SceneContact f;
       f.id = makeContactId(key.first, key.second, slot[i]);
       f.body_a = key.first;
       f.body_b = key.second;
       f.body_a_name = A.name;
       f.body_b_name = B.name;
-      f.point = points[i].point;
+      f.position = points[i].point;
       f.normal = points[i].normal;
-      tangentsFromNormal(f.normal, &f.t1, &f.t2);
+      tangentsFromNormal(f.normal, &f.tangent1, &f.tangent2);
       f.depth = points[i].depth;
       // Only the rows the pair asks for (MuJoCo's condim 1 / 3 / 4 / 6).
       f.mu = model.mu;

@@ -74,9 +74,9 @@ const StepProblem& SceneSimulator::buildStep() { return buildStep(scene_.params.
 // bounce starts up to one step's travel early, and a resting contact, slower than the
 // threshold, never bounces). Contacts with e = 0 and scenes without restitution: untouched.
 void SceneSimulator::applyRestitution(double dt) {
-  const std::vector<ContactFrame>& frames = problem_.frames;
+  const std::vector<SceneContact>& frames = problem_.frames;
   bool any = false;
-  for (const ContactFrame& f : frames) any = any || f.restitution > 0.0;
+  for (const SceneContact& f : frames) any = any || f.restitution > 0.0;
   if (!any) return;
   std::vector<Vector6d> v_now(scene_.bodies.size(), Vector6d::Zero());
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
@@ -87,7 +87,7 @@ void SceneSimulator::applyRestitution(double dt) {
   const std::vector<int>& offsets = model_->rowOffsets();
   Problem& p = problem_.problem;
   for (std::size_t c = 0; c < frames.size(); ++c) {
-    const ContactFrame& f = frames[c];
+    const SceneContact& f = frames[c];
     if (f.restitution <= 0.0 || vn[c] >= -scene_.params.restitution_threshold) continue;
     if (f.gap() + dt * vn[c] >= 0.0) continue;  // does not reach the other body this step
     p.d_free[offsets[c]] += f.restitution * dt * vn[c] - gapTerm(f.gap());
@@ -114,7 +114,7 @@ const StepProblem& SceneSimulator::buildStep(double dt) {
   Problem& p = problem_.problem;
   p.name = scene_.name;
   p.contacts = problemContacts(scene_, problem_.frames);
-  for (const ContactFrame& f : problem_.frames) {
+  for (const SceneContact& f : problem_.frames) {
     building_.max_penetration = std::max(building_.max_penetration, f.depth);
     if (f.type == ContactType::kFrictionless) ++building_.frictionless_contacts;
   }

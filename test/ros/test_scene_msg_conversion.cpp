@@ -59,8 +59,8 @@ void expectRoundTrip(const std::string& name) {
     EXPECT_EQ(b.rows, a.rows);
     EXPECT_EQ(b.mu, a.mu) << "μ is explicit, never MU_DEFAULT";
     EXPECT_FALSE(frames[i].derived_tangents) << "the tangents are published";
-    EXPECT_LT((frames[i].tangent1 - sp.frames[i].t1).norm(), 1e-12);
-    EXPECT_LT((frames[i].tangent2 - sp.frames[i].t2).norm(), 1e-12);
+    EXPECT_LT((frames[i].tangent1 - sp.frames[i].tangent1).norm(), 1e-12);
+    EXPECT_LT((frames[i].tangent2 - sp.frames[i].tangent2).norm(), 1e-12);
     EXPECT_EQ(contacts.contacts[i].body_a, sp.frames[i].body_a_name);
     EXPECT_EQ(contacts.contacts[i].body_b, sp.frames[i].body_b_name);
   }

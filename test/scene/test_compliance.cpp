@@ -15,7 +15,7 @@ namespace {
 const std::string kDir = LCS_SCENES_DIR;
 
 // W (both storages) against dt² J M⁻¹ Jᵀ assembled from the full matrices.
-void checkCompliance(const Scene& scene, const std::vector<ContactFrame>& frames, double dt) {
+void checkCompliance(const Scene& scene, const std::vector<SceneContact>& frames, double dt) {
   ASSERT_FALSE(frames.empty());
   const RigidContactModel model(scene, frames);
   const Eigen::MatrixXd J = model.denseJacobian();
@@ -33,7 +33,7 @@ void checkCompliance(const Scene& scene, const std::vector<ContactFrame>& frames
   for (int i = 0; i < sparse.blockCount(); ++i) {
     for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
       const int j = sparse.block_col[k];
-      const ContactFrame &fi = frames[i], &fj = frames[j];
+      const SceneContact &fi = frames[i], &fj = frames[j];
       auto dyn = [&](int b) { return !scene.bodies[b].is_static; };
       const bool share = (dyn(fi.body_a) && (fi.body_a == fj.body_a || fi.body_a == fj.body_b)) ||
                          (dyn(fi.body_b) && (fi.body_b == fj.body_a || fi.body_b == fj.body_b));
@@ -44,7 +44,7 @@ void checkCompliance(const Scene& scene, const std::vector<ContactFrame>& frames
   int expected_blocks = 0;
   for (std::size_t i = 0; i < frames.size(); ++i)
     for (std::size_t j = 0; j < frames.size(); ++j) {
-      const ContactFrame &fi = frames[i], &fj = frames[j];
+      const SceneContact &fi = frames[i], &fj = frames[j];
       auto dyn = [&](int b) { return !scene.bodies[b].is_static; };
       const bool share = (dyn(fi.body_a) && (fi.body_a == fj.body_a || fi.body_a == fj.body_b)) ||
                          (dyn(fi.body_b) && (fi.body_b == fj.body_a || fi.body_b == fj.body_b));
@@ -85,8 +85,8 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
     // d_free: gap + dt v_free·n, tangents dt v_free·t.
     const double vz_free = -0.2 - 9.81 * dt;
     EXPECT_NEAR(p.d_free[0], gap + dt * vz_free, 1e-15);
-    EXPECT_NEAR(p.d_free[1], dt * frames[0].t1.dot(Eigen::Vector3d(0.5, 0, vz_free)), 1e-15);
-    EXPECT_NEAR(p.d_free[2], dt * frames[0].t2.dot(Eigen::Vector3d(0.5, 0, vz_free)), 1e-15);
+    EXPECT_NEAR(p.d_free[1], dt * frames[0].tangent1.dot(Eigen::Vector3d(0.5, 0, vz_free)), 1e-15);
+    EXPECT_NEAR(p.d_free[2], dt * frames[0].tangent2.dot(Eigen::Vector3d(0.5, 0, vz_free)), 1e-15);
   }
   // Touching (gap 0): W_nn = dt²/m, W_tt = 3.5 dt²/m.
   {

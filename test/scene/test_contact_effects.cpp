@@ -131,7 +131,7 @@ TEST(ContactRows, EachPairPaysForTheRowsItAsksFor) {
   ASSERT_EQ(p.contacts.size(), 4u);
   std::map<std::string, int> rows;
   for (std::size_t c = 0; c < p.contacts.size(); ++c) {
-    const ContactFrame& f = sim.lastProblem().frames[c];
+    const SceneContact& f = sim.lastProblem().frames[c];
     rows[f.body_a_name == "ground" ? f.body_b_name : f.body_a_name] = p.contacts[c].rows;
   }
   EXPECT_EQ(rows["b1"], 1);

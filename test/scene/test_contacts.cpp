@@ -23,19 +23,19 @@ TEST(Contacts, SphereOnPlaneIsExact) {
   const double r = 0.1, depth = 0.002;
   s.bodies.push_back(dynamicBody("ball", sphereShape(r), 1.0, Eigen::Vector3d(0.3, -0.2, r - depth)));
   ContactGenerator gen(s);
-  const std::vector<ContactFrame> c = gen.generate();
+  const std::vector<SceneContact> c = gen.generate();
   ASSERT_EQ(c.size(), 1u);
-  const ContactFrame& f = c[0];
+  const SceneContact& f = c[0];
   EXPECT_EQ(f.body_a_name, "ball");  // A is the dynamic body
   EXPECT_EQ(f.body_b_name, "ground");
   EXPECT_NEAR((f.normal - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-12);  // from B (ground) into A
   EXPECT_NEAR(f.depth, depth, 1e-12);
   // Midway between the surfaces: the sphere's lowest point is at -depth, the plane at 0.
-  EXPECT_NEAR((f.point - Eigen::Vector3d(0.3, -0.2, -0.5 * depth)).norm(), 0.0, 1e-12);
-  EXPECT_NEAR(f.t1.dot(f.normal), 0.0, 1e-15);
-  EXPECT_NEAR(f.t2.dot(f.normal), 0.0, 1e-15);
-  EXPECT_NEAR((f.t1.cross(f.t2) - f.normal).norm(), 0.0, 1e-15);  // right-handed (t1, t2, n)
-  EXPECT_NEAR((f.t1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);  // n × x
+  EXPECT_NEAR((f.position - Eigen::Vector3d(0.3, -0.2, -0.5 * depth)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(f.tangent1.dot(f.normal), 0.0, 1e-15);
+  EXPECT_NEAR(f.tangent2.dot(f.normal), 0.0, 1e-15);
+  EXPECT_NEAR((f.tangent1.cross(f.tangent2) - f.normal).norm(), 0.0, 1e-15);  // right-handed (t1, t2, n)
+  EXPECT_NEAR((f.tangent1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);  // n × x
   EXPECT_EQ(f.type, ContactType::kFrictional);
   EXPECT_EQ(f.rows, 3);
   EXPECT_DOUBLE_EQ(f.mu, s.params.mu);
@@ -52,7 +52,7 @@ TEST(Contacts, SpeculativeWithinMarginOnly) {
     const auto c = gen.generate();
     ASSERT_EQ(c.size(), 1u);
     EXPECT_NEAR(c[0].gap(), 0.004, 1e-12);
-    EXPECT_NEAR(c[0].point.z(), 0.002, 1e-12);
+    EXPECT_NEAR(c[0].position.z(), 0.002, 1e-12);
   }
   s.bodies[1].position.z() = 0.1 + 0.011;
   ContactGenerator gen(s);
@@ -67,13 +67,13 @@ TEST(Contacts, BoxOnGroundHasFourCorners) {
   const auto c = gen.generate();
   ASSERT_EQ(c.size(), 4u);
   std::set<std::pair<int, int>> corners;
-  for (const ContactFrame& f : c) {
+  for (const SceneContact& f : c) {
     EXPECT_NEAR((f.normal - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-12);
     EXPECT_NEAR(f.depth, 0.0, 1e-12);
-    EXPECT_NEAR(f.point.z(), 0.0, 1e-12);
-    corners.emplace(f.point.x() > 1 ? 1 : -1, f.point.y() > 2 ? 1 : -1);
-    EXPECT_NEAR(std::abs(f.point.x() - 1), 0.2, 1e-12);
-    EXPECT_NEAR(std::abs(f.point.y() - 2), 0.1, 1e-12);
+    EXPECT_NEAR(f.position.z(), 0.0, 1e-12);
+    corners.emplace(f.position.x() > 1 ? 1 : -1, f.position.y() > 2 ? 1 : -1);
+    EXPECT_NEAR(std::abs(f.position.x() - 1), 0.2, 1e-12);
+    EXPECT_NEAR(std::abs(f.position.y() - 2), 0.1, 1e-12);
   }
   EXPECT_EQ(corners.size(), 4u);
 }
@@ -96,7 +96,7 @@ TEST(Contacts, NormalConventionForEveryShapePair) {
         ContactGenerator gen(s);
         const auto c = gen.generate();
         ASSERT_FALSE(c.empty());
-        for (const ContactFrame& f : c) {
+        for (const SceneContact& f : c) {
           EXPECT_EQ(f.body_a, 0);  // both dynamic: A is the lower index
           const Eigen::Vector3d expected(0, 0, lower_is_top ? 1.0 : -1.0);
           EXPECT_NEAR((f.normal - expected).norm(), 0.0, 1e-4);
@@ -111,17 +111,17 @@ TEST(Contacts, IdsPersistAcrossSteps) {
   SceneParams params = loadSceneParams(kDir + "/box_stack.yaml");
   SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/box_stack.urdf", params));
   sim.step();
-  const std::vector<ContactFrame> first = sim.lastProblem().frames;
+  const std::vector<SceneContact> first = sim.lastProblem().frames;
   ASSERT_EQ(first.size(), 20u);  // 5 face contacts × 4 corners
   std::set<std::int64_t> ids;
-  for (const ContactFrame& f : first) ids.insert(f.id);
+  for (const SceneContact& f : first) ids.insert(f.id);
   EXPECT_EQ(ids.size(), first.size()) << "ids are unique";
   for (int k = 0; k < 50; ++k) sim.step();
-  const std::vector<ContactFrame>& later = sim.lastProblem().frames;
+  const std::vector<SceneContact>& later = sim.lastProblem().frames;
   ASSERT_EQ(later.size(), first.size());
   for (std::size_t i = 0; i < first.size(); ++i) {
     EXPECT_EQ(later[i].id, first[i].id);
-    EXPECT_NEAR((later[i].point - first[i].point).norm(), 0.0, 1e-3);
+    EXPECT_NEAR((later[i].position - first[i].position).norm(), 0.0, 1e-3);
   }
   EXPECT_EQ(sim.lastStats().generation.new_ids, 0);
   // A second simulator of the same scene produces the same ids: deterministic.
@@ -144,7 +144,7 @@ TEST(Contacts, DisabledPairsAreNotTested) {
     EXPECT_EQ(gen.lastStats().narrowphase_tests, 5);
     EXPECT_EQ(gen.narrowphaseTests(), 5);
     bool ab = false;
-    for (const ContactFrame& f : c) ab |= (f.body_a_name == "a" && f.body_b_name == "b");
+    for (const SceneContact& f : c) ab |= (f.body_a_name == "a" && f.body_b_name == "b");
     EXPECT_TRUE(ab);
   }
   s.params.disable_collisions.emplace_back("b", "a");
@@ -155,7 +155,7 @@ TEST(Contacts, DisabledPairsAreNotTested) {
     const auto c = gen.generate();
     EXPECT_EQ(gen.lastStats().narrowphase_tests, 2);
     EXPECT_EQ(gen.lastStats().skipped_disabled, 3);
-    for (const ContactFrame& f : c) EXPECT_EQ(f.body_b_name, "ground");
+    for (const SceneContact& f : c) EXPECT_EQ(f.body_b_name, "ground");
   }
   EXPECT_EQ(gen.narrowphaseTests(), 6);
   gen.resetCounters();
@@ -167,7 +167,7 @@ TEST(Contacts, LinksWithoutCollisionAndStaticPairsAreSkipped) {
   // and the world link without geometry.
   SceneSimulator sim(loadNamedScene(kDir, "sphere_pile"));
   const StepProblem& sp = sim.buildStep();
-  for (const ContactFrame& f : sp.frames) {
+  for (const SceneContact& f : sp.frames) {
     EXPECT_FALSE(sim.body(f.body_a).is_static && sim.body(f.body_b).is_static);
     EXPECT_NE(f.body_a_name, "world");
     EXPECT_NE(f.body_b_name, "world");
@@ -183,7 +183,7 @@ TEST(Contacts, PerPairFrictionAndFrictionlessRows) {
   const StepProblem& sp = sim.buildStep();
   int slick = 0, grip = 0, ball = 0;
   for (std::size_t i = 0; i < sp.frames.size(); ++i) {
-    const ContactFrame& f = sp.frames[i];
+    const SceneContact& f = sp.frames[i];
     const Contact& c = sp.problem.contacts[i];
     EXPECT_EQ(c.id, f.id);
     EXPECT_EQ(c.type, f.type);

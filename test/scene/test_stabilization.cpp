@@ -111,7 +111,7 @@ TEST(Softness, RestingStackHasTheAnalyticStaticDeflection) {
   // Penetration per interface from the contacts of the last step, against the analytic.
   std::map<std::string, std::vector<double>> depths;  // "lower/upper" → depths
   const StepProblem& sp = sim.lastProblem();
-  for (const ContactFrame& f : sp.frames)
+  for (const SceneContact& f : sp.frames)
     depths[std::min(f.body_a_name, f.body_b_name) + "/" + std::max(f.body_a_name, f.body_b_name)].push_back(f.depth);
   const char* below[3] = {"box0/ground", "box0/box1", "box1/box2"};
   double load = 0.0;

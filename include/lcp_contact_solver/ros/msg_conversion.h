@@ -1,9 +1,12 @@
-// Conversions between the package's messages and the ROS-free core, as free functions.
-// Every function that reads a message validates it and returns an empty string on
-// success or one sentence naming the first fault, so a malformed message never reaches
-// the solver.
+// Conversions between the package's messages and the ROS-free core, as free functions:
+// the one home of message conversion (the simulators' scene_msg_conversion and the MuJoCo
+// bridge write their ContactArray through toContactArrayMsg here; Eigen ↔ geometry_msgs is
+// msg_primitives.h). Every function that reads a message validates it and returns an empty
+// string on success or one sentence naming the first fault, so a malformed message never
+// reaches the solver.
 #pragma once
 
+#include "lcp_contact_solver/core/contact_frame.h"
 #include "lcp_contact_solver/core/problem.h"
 #include "lcp_contact_solver/core/solve_result.h"
 
@@ -14,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -21,14 +25,16 @@ namespace lcp_contact_solver_ros {
 
 namespace lcs = ::lcp_contact_solver;
 
-// Where a contact is and its unit directions, in the contact array's header frame.
-struct ContactFrame {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d tangent1 = Eigen::Vector3d::UnitX();
-  Eigen::Vector3d tangent2 = Eigen::Vector3d::UnitY();
-  bool derived_tangents = false;
-};
+// The core's contact frame (core/contact_frame.h), in the contact array's header frame.
+// Named here too because the node, the markers and this layer's users spell it
+// lcp_contact_solver_ros::ContactFrame; it is the same type, not a second one.
+using lcs::ContactFrame;
+
+// The one mapping between the core's contact types and ContactPoint's type constants (the
+// numbers agree by design; msg_conversion.cpp asserts it at compile time).
+std::uint8_t toMsgType(lcs::ContactType type);
+// Only for a type code that contactRows-style validation accepted (0..4).
+lcs::ContactType fromMsgType(std::uint8_t type);
 
 // Deterministic tangents of a unit normal: the core's rule (core/contact_frame.h), shared
 // with the scene layer so both derive the same friction rows.
@@ -43,6 +49,19 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 // `max_rows` > 0 refuses larger problems. Stamps are not compared here.
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
                       int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames);
+
+// Body names of one contact, for toContactArrayMsg.
+struct ContactBodies {
+  std::string body_a, body_b;
+};
+
+// The ContactArray of a problem, written one way for every simulator: per contact (problem
+// order) its id, type, rows, μ, μ_torsional, μ_rolling, gap, erp, softness and its rows'
+// d_free from `problem`; position, normal and tangents from `frames` (tangents zero where
+// derived_tangents: the reader derives the same); body names from `bodies`. `frames` and
+// `bodies` have one entry per contact.
+lcs::ContactArray toContactArrayMsg(const lcs::Problem& problem, const std::vector<ContactFrame>& frames,
+                                    const std::vector<ContactBodies>& bodies, const std_msgs::Header& header);
 
 // The compliance message of a core matrix (dense, or block-sparse with the core's blocks).
 lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W);

@@ -1,7 +1,7 @@
 // Messages of the example simulator (scene_simulator): a SceneSimulator step as the
 // solver node's input, the node's forces back as one λ per row, body poses as tf and body
-// shapes as markers. Free functions; the compliance goes through msg_conversion's
-// toComplianceMsg (same storage as the step's W).
+// shapes as markers. Free functions; the contact array and the compliance go through
+// msg_conversion's toContactArrayMsg and toComplianceMsg (same storage as the step's W).
 //
 // Kept apart from msg_conversion.h so the solver's ROS library stays independent of the
 // scene layer; this file links both.

@@ -48,7 +48,7 @@ std::vector<Vector6d> freeVelocities(const Scene& scene, double dt);
 // maps forces back to body velocities. Cost O(contacts × neighbours).
 class RigidContactModel {
  public:
-  RigidContactModel(const Scene& scene, const std::vector<ContactFrame>& frames);
+  RigidContactModel(const Scene& scene, const std::vector<SceneContact>& frames);
 
   int contactCount() const { return static_cast<int>(contacts_.size()); }
   int rowCount() const { return offsets_.empty() ? 0 : offsets_.back(); }
@@ -98,11 +98,11 @@ class RigidContactModel {
 };
 
 // The core contacts of the frames: id, type, rows, μ, gap, and the scene's erp and softness.
-std::vector<Contact> problemContacts(const Scene& scene, const std::vector<ContactFrame>& frames);
+std::vector<Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames);
 
 // Problem (contacts, W, d_free) of the given frames; frames.size() == contacts. With
 // kBodies the problem carries the body form (Problem::bodies) and no W.
-Problem buildProblem(const Scene& scene, const std::vector<ContactFrame>& frames,
+Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
                      const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
 
 }  // namespace scene

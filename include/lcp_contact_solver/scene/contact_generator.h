@@ -21,7 +21,7 @@
 //   - body A and body B of a pair: if exactly one is static, A is the dynamic one;
 //     otherwise A has the lower body index;
 //   - the normal points from body B into body A; n·λ_n is the force on A (−n·λ_n on B);
-//   - `point` is midway between the two surfaces along the normal (FCL's convention);
+//   - `position` is midway between the two surfaces along the normal (FCL's convention);
 //   - depth > 0 is penetration, gap = −depth;
 //   - tangents: t1 = normalize(n × a) with a the world axis least aligned with n (first
 //     one on ties, with a 1e-6 tie tolerance: see core/contact_frame.h), t2 = n × t1;
@@ -49,15 +49,13 @@ namespace lcp_contact_solver {
 namespace scene {
 
 // Everything known about one contact, kept beside the core Problem (same order) so a
-// ROS layer can fill its messages without recomputing.
-struct ContactFrame {
+// ROS layer can fill its messages without recomputing: the core's ContactFrame (world frame:
+// `position` in m, `normal` from B into A, the rule's tangents, given explicitly so
+// derived_tangents stays false) plus what the scene knows.
+struct SceneContact : ContactFrame {
   std::int64_t id = 0;
   int body_a = -1, body_b = -1;  // indices into Scene::bodies
   std::string body_a_name, body_b_name;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();   // world, m
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); // world, unit, from B into A
-  Eigen::Vector3d t1 = Eigen::Vector3d::UnitY();
-  Eigen::Vector3d t2 = -Eigen::Vector3d::UnitX();
   double depth = 0.0;  // m; > 0 penetration, < 0 gap (speculative contact)
   double mu = 0.0;
   double mu_torsional = 0.0;  // m
@@ -91,7 +89,7 @@ class ContactGenerator {
   ContactGenerator& operator=(const ContactGenerator&) = delete;
 
   // Contacts at the scene's current poses. Updates the id memory (call once per step).
-  std::vector<ContactFrame> generate();
+  std::vector<SceneContact> generate();
 
   const ContactGenerationStats& lastStats() const { return last_; }
   // Narrowphase tests since construction (or resetCounters()).

@@ -30,7 +30,7 @@ namespace scene {
 // What one step asks the solver.
 struct StepProblem {
   Problem problem;                  // contacts (id, type, rows, μ), W, d_free; rows in frame order
-  std::vector<ContactFrame> frames; // one per problem contact, same order
+  std::vector<SceneContact> frames; // one per problem contact, same order
   double dt = 0.0;                  // s
   double time = 0.0;                // simulated time at the start of the step (s)
   long long step_index = 0;         // 0 for the first step

@@ -64,22 +64,6 @@ std::unique_ptr<scene::MujocoWorld> loadWorld(const MujocoBridgeSettings& s) {
   return world;
 }
 
-geometry_msgs::Point point(const Eigen::Vector3d& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
-
-geometry_msgs::Vector3 vector(const Eigen::Vector3d& v) {
-  geometry_msgs::Vector3 p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
-
 void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue kv;
   kv.key = key;
@@ -124,48 +108,27 @@ std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSet
 
 lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& problem, const scene::MujocoWorld& world,
                                                    const std_msgs::Header& header) {
-  lcp_contact_solver::ContactArray msg;
-  msg.header = header;
-  const std::vector<int> offsets = problem.problem.rowOffsets();
-  msg.contacts.resize(problem.entries.size());
+  std::vector<ContactFrame> frames(problem.entries.size());
+  std::vector<ContactBodies> bodies(problem.entries.size());
   for (std::size_t i = 0; i < problem.entries.size(); ++i) {
     const scene::MujocoEntry& e = problem.entries[i];
-    const lcs::Contact& c = problem.problem.contacts[i];
-    ContactPoint& p = msg.contacts[i];
-    p.id = c.id;
-    p.body_a = world.bodyName(e.body_a);
-    p.body_b = world.bodyName(e.body_b);
-    p.position = point(e.position);
-    p.normal = vector(e.normal);
-    if (e.kind == scene::MujocoRowKind::kElliptic) {  // MuJoCo's own frame, so the rows stay its rows
-      p.tangent1 = vector(e.tangent1);
-      p.tangent2 = vector(e.tangent2);
+    // Elliptic contacts keep MuJoCo's own frame, so the rows stay its rows; the other
+    // entries (pyramid edges, limits, equalities) leave the tangents to the reader's rule.
+    if (e.kind == scene::MujocoRowKind::kElliptic) {
+      frames[i].position = e.position;
+      frames[i].normal = e.normal;
+      frames[i].tangent1 = e.tangent1;
+      frames[i].tangent2 = e.tangent2;
+    } else {
+      frames[i] = lcs::frameFromNormal(e.position, e.normal);
     }
-    for (int r = offsets[i]; r < offsets[i + 1]; ++r) p.d_free.push_back(problem.problem.d_free[r]);
-    switch (c.type) {
-      case lcs::ContactType::kFrictional:
-        p.type = ContactPoint::FRICTIONAL;
-        p.mu = c.mu;
-        break;
-      case lcs::ContactType::kFrictionless:
-        p.type = ContactPoint::FRICTIONLESS;
-        p.mu = 0.0;
-        break;
-      case lcs::ContactType::kBilateral:
-        p.type = ContactPoint::BILATERAL;
-        p.mu = 0.0;
-        break;
-      case lcs::ContactType::kTorsional:
-      case lcs::ContactType::kRolling:  // the adapter maps MuJoCo's condim 4/6 otherwise
-        p.type = c.type == lcs::ContactType::kTorsional ? ContactPoint::TORSIONAL : ContactPoint::ROLLING;
-        p.mu = c.mu;
-        p.mu_torsional = c.mu_torsional;
-        p.mu_rolling = c.mu_rolling;
-        break;
-    }
-    p.rows = static_cast<std::uint32_t>(c.rows);
-    // gap, erp, softness stay 0: MuJoCo's reference acceleration (solref) is already in d_free.
+    bodies[i] = {world.bodyName(e.body_a), world.bodyName(e.body_b)};
   }
+  lcp_contact_solver::ContactArray msg = toContactArrayMsg(problem.problem, frames, bodies, header);
+  // MuJoCo's reference acceleration (solref) is already in d_free: no Baumgarte correction
+  // or softness on top, whatever the node's ~erp / ~softness (the adapter's contacts keep
+  // the core's "use the default" there, so in-process solves are unchanged).
+  for (ContactPoint& p : msg.contacts) p.erp = p.softness = 0.0;
   return msg;
 }
 
