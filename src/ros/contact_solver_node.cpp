@@ -11,6 +11,7 @@
 #include <boost/make_shared.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -25,6 +26,22 @@ std::string stampText(const ros::Time& stamp) {
   std::ostringstream out;
   out << stamp;
   return out.str();
+}
+
+// The pairing window's clock (see the timer in setUpTopics).
+ros::Time wallNow() {
+  const ros::WallTime now = ros::WallTime::now();
+  return ros::Time(now.sec, now.nsec);
+}
+
+// For warnings throttled in wall time: rosconsole's *_THROTTLE count ROS time, and with
+// /use_sim_time a simulator whose runs last under the period (or whose clock restarts or
+// stops) never gets them (found by the simulator-restart rostest). True at most once per
+// `period` wall seconds per `last`.
+bool wallThrottle(std::atomic<double>* last, double period) {
+  const double now = ros::WallTime::now().toSec();
+  double previous = last->load();
+  return now - previous >= period && last->compare_exchange_strong(previous, now);
 }
 
 NodeSettings loadOrThrow(const ros::NodeHandle& pnh) {
@@ -77,7 +94,9 @@ void ContactSolverNode::setUpTopics() {
                                   ros::TransportHints().tcpNoDelay());
 
   const double period = std::min(0.25, active_.pairing_window / 4.0);
-  timer_ = nh_.createTimer(ros::Duration(period), &ContactSolverNode::onTimer, this);
+  // Wall time: the pairing window is about messages in transit, and with /use_sim_time a
+  // stopped /clock must not stop reports (nor a fast one call pairs unpaired in transit).
+  timer_ = nh_.createWallTimer(ros::WallDuration(period), &ContactSolverNode::onTimer, this);
 }
 
 void ContactSolverNode::setUpReconfigure() {
@@ -99,11 +118,11 @@ void ContactSolverNode::setUpDiagnostics() {
 
 void ContactSolverNode::onContacts(const ContactArray::ConstPtr& contacts) {
   solve_rate_->contactsReceived();
-  inputs_.addContacts(contacts, ros::Time::now());
+  inputs_.addContacts(contacts, wallNow());
 }
 
 void ContactSolverNode::onCompliance(const Compliance::ConstPtr& compliance) {
-  inputs_.addCompliance(compliance, ros::Time::now());
+  inputs_.addCompliance(compliance, wallNow());
 }
 
 void ContactSolverNode::solverLoop() {
@@ -126,7 +145,9 @@ void ContactSolverNode::onPair(const InputPair& pair) {
   // Stamps going back mean the simulator restarted (or its clock was reset): the contact
   // ids it sends now name other contacts, so the previous forces must not seed them.
   if (!last_stamp_.isZero() && contacts->header.stamp < last_stamp_) {
-    ROS_WARN_STREAM_THROTTLE(1.0, "Contacts at " << stampText(contacts->header.stamp) << " come after "
+    static std::atomic<double> last_warning{0.0};
+    if (wallThrottle(&last_warning, 1.0))
+      ROS_WARN_STREAM("Contacts at " << stampText(contacts->header.stamp) << " come after "
                                   << stampText(last_stamp_) << ": time jumped back (simulator restart?); "
                                   << "the warm start is reset");
     cycle_.resetWarmStart();
@@ -210,8 +231,8 @@ void ContactSolverNode::onReconfigure(Config& config, std::uint32_t /*level*/) {
   pnh_.setParam("showTranslation", std::vector<double>(t.begin(), t.end()));
 }
 
-void ContactSolverNode::onTimer(const ros::TimerEvent& /*event*/) {
-  for (const UnsolvedInput& input : inputs_.takeExpired(ros::Time::now(), active_.pairing_window))
+void ContactSolverNode::onTimer(const ros::WallTimerEvent& /*event*/) {
+  for (const UnsolvedInput& input : inputs_.takeExpired(wallNow(), active_.pairing_window))
     reportUnsolved(input);
   updater_.update();
 }
@@ -322,7 +343,9 @@ void ContactSolverNode::reportUnsolved(const UnsolvedInput& input) {
     ++(input.behind ? health_.dropped : health_.unpaired);
     ++health_.problems_since_report;
   }
-  ROS_WARN_STREAM_THROTTLE(1.0, "Contacts at " << stampText(input.header.stamp) << " not solved: " << input.reason);
+  static std::atomic<double> last_warning{0.0};
+  if (wallThrottle(&last_warning, 1.0))
+    ROS_WARN_STREAM("Contacts at " << stampText(input.header.stamp) << " not solved: " << input.reason);
   const std::uint8_t code = input.behind ? SolverStats::DROPPED : SolverStats::NO_COMPLIANCE;
   stats_pub_.publish(boost::make_shared<SolverStats>(rejectedStatsMsg(input.header, code, input.reason)));
 }

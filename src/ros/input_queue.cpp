@@ -25,6 +25,8 @@ InputQueue::InputQueue(OverloadPolicy policy, std::size_t capacity)
 void InputQueue::addContacts(const lcp_contact_solver::ContactArray::ConstPtr& contacts, const ros::Time& now) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.arrays_received;
+  if (contacts->header.stamp < last_contacts_stamp_) forgetOldRunLocked(contacts->header.stamp, true);
+  last_contacts_stamp_ = contacts->header.stamp;
   auto it = pending_.find(contacts->header.stamp);
   if (it != pending_.end() && it->second.contacts) {
     // The same stamp again before its compliance (a simulator that restarted): the first
@@ -44,6 +46,8 @@ void InputQueue::addContacts(const lcp_contact_solver::ContactArray::ConstPtr& c
 void InputQueue::addCompliance(const lcp_contact_solver::Compliance::ConstPtr& compliance, const ros::Time& now) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.compliances_received;
+  if (compliance->header.stamp < last_compliance_stamp_) forgetOldRunLocked(compliance->header.stamp, false);
+  last_compliance_stamp_ = compliance->header.stamp;
   auto it = pending_.find(compliance->header.stamp);
   if (it == pending_.end()) it = pending_.emplace(compliance->header.stamp, Pending{nullptr, nullptr, now}).first;
   if (it->second.compliance) ++counts_.compliances_unpaired;  // a duplicate: the newer one counts
@@ -61,6 +65,31 @@ void InputQueue::completeLocked(std::map<ros::Time, Pending>::iterator it) {
     ready_.pop_front();
   }
   ready_cv_.notify_one();
+}
+
+void InputQueue::forgetOldRunLocked(const ros::Time& stamp, bool contacts_topic) {
+  const ros::Time& last = contacts_topic ? last_contacts_stamp_ : last_compliance_stamp_;
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    const Pending& p = it->second;
+    const bool has_this_half = contacts_topic ? static_cast<bool>(p.contacts) : static_cast<bool>(p.compliance);
+    // A half of this topic came before the jump: old. A half of the other topic at a later
+    // stamp than the new run's first: old too (the new run has not got that far).
+    if (!has_this_half && it->first <= stamp) {
+      ++it;
+      continue;
+    }
+    if (p.contacts) {
+      ++counts_.unpaired;
+      std::ostringstream reason;
+      reason << "given up: stamps on " << (contacts_topic ? "contacts" : "compliance") << " jumped back from "
+             << last << " to " << stamp << " (simulator restart?) before its Compliance came";
+      dropped_.push_back({p.contacts->header, reason.str(), false});
+    } else {
+      ++counts_.compliances_unpaired;
+    }
+    it = pending_.erase(it);
+  }
+  ready_cv_.notify_one();  // take() reports the given-up arrays
 }
 
 void InputQueue::dropLocked(const InputPair& pair, const std::string& reason) {

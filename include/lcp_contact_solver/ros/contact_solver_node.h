@@ -71,7 +71,7 @@ class ContactSolverNode {
   bool onSolveService(lcp_contact_solver::SolveContacts::Request& request,
                       lcp_contact_solver::SolveContacts::Response& response);
   void onReconfigure(Config& config, std::uint32_t level);
-  void onTimer(const ros::TimerEvent& event);
+  void onTimer(const ros::WallTimerEvent& event);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   // Cycle steps; the caller holds solve_mutex_.
@@ -116,7 +116,7 @@ class ContactSolverNode {
 
   diagnostic_updater::Updater updater_;
   std::unique_ptr<SolveRateStatus> solve_rate_;
-  ros::Timer timer_;
+  ros::WallTimer timer_;
 };
 
 }  // namespace lcp_contact_solver_ros

@@ -58,6 +58,10 @@ class InputQueue {
  public:
   InputQueue(OverloadPolicy policy, std::size_t capacity);
 
+  // A stamp older than the topic's previous one means a restart: what the old run left
+  // waiting is given up first (arrays as unpaired, reason "jumped back"), except halves of the
+  // other topic at stamps <= the new one, which the new run may already have sent.
+  // `now` is the arrival time the window counts from (the node passes wall time).
   void addContacts(const lcp_contact_solver::ContactArray::ConstPtr& contacts, const ros::Time& now);
   void addCompliance(const lcp_contact_solver::Compliance::ConstPtr& compliance, const ros::Time& now);
 
@@ -80,6 +84,9 @@ class InputQueue {
     ros::Time first_arrival;
   };
   void completeLocked(std::map<ros::Time, Pending>::iterator it);
+  // Stamps on one topic went back to `stamp` (the simulator restarted): gives up what the
+  // old run left waiting, so no new half pairs with an old one.
+  void forgetOldRunLocked(const ros::Time& stamp, bool contacts_topic);
   void dropLocked(const InputPair& pair, const std::string& reason);
 
   const OverloadPolicy policy_;
@@ -91,6 +98,9 @@ class InputQueue {
   std::vector<UnsolvedInput> dropped_;    // dropped by add*() (queue policy), for take()
   InputCounts counts_;
   bool stopped_ = false;
+  // The newest stamp seen on each topic (messages of one publisher arrive in order).
+  ros::Time last_contacts_stamp_;
+  ros::Time last_compliance_stamp_;
 };
 
 }  // namespace lcp_contact_solver_ros
