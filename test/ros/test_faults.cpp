@@ -97,6 +97,13 @@ class Faults : public testing::Test {
         });
   }
 
+  // The callbacks touch the members below, which are destroyed before the subscribers: stop
+  // them first (found as a "double free" at the end of the simulator-restart test).
+  void TearDown() override {
+    for (ros::Subscriber* sub : {&contacts_sub_, &compliance_sub_, &forces_sub_, &stats_sub_, &diag_sub_})
+      sub->shutdown();
+  }
+
   std::vector<Event> events() {
     std::lock_guard<std::mutex> lock(mutex_);
     return events_;
