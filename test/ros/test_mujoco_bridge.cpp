@@ -3,6 +3,10 @@
 //   - the forces of every step came from the solver (no timeout, failure or mismatch);
 //   - our residual is tight and, when ~max_rel_diff >= 0, every step's forces agree with
 //     MuJoCo's efc_force within it (the pyramidal cone: an LCP with a unique solution);
+//   - with ~max_position_diff >= 0 (drive with the bridge's ~reference: MuJoCo's own run of the
+//     same model beside ours), the physics agree where the forces differ by design: every
+//     body within ~max_position_diff of its place in MuJoCo's run, the energies within
+//     ~max_energy_diff, the same geom pairs in contact on all but ~max_pair_differ_steps steps;
 //   - the humanoid stays on the floor (penetration below 2 cm: MuJoCo's soft contacts give
 //     ~1.2 cm on the landing).
 #include <diagnostic_msgs/DiagnosticStatus.h>
@@ -10,6 +14,8 @@
 #include <ros/ros.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <string>
@@ -31,6 +37,11 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
   double max_rel_diff = 1e-6;
   pnh.getParam("min_reports", min_reports);
   pnh.getParam("max_rel_diff", max_rel_diff);
+  double max_position_diff = -1.0, max_energy_diff = -1.0;
+  int max_pair_differ_steps = 0;
+  pnh.getParam("max_position_diff", max_position_diff);
+  pnh.getParam("max_energy_diff", max_energy_diff);
+  pnh.getParam("max_pair_differ_steps", max_pair_differ_steps);
 
   std::vector<Report> reports;
   ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticStatus>(
@@ -48,8 +59,18 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
   ASSERT_GE(static_cast<int>(reports.size()), min_reports) << "too few step reports from the bridge";
 
   double worst_rel = 0.0, worst_residual = 0.0, deepest = 0.0;
-  int max_contacts = 0;
+  int max_contacts = 0, pair_differ_steps = 0;
+  double worst_position = 0.0, worst_energy = 0.0;
   for (const Report& r : reports) {
+    if (max_position_diff >= 0.0) {  // before the forces' check: the reference runs regardless
+      const double position = number(r, "ref_position_diff");
+      const double energy = std::abs(number(r, "energy") - number(r, "ref_energy"));
+      EXPECT_LE(position, max_position_diff) << "step " << r.at("step");
+      EXPECT_LE(energy, max_energy_diff) << "step " << r.at("step");
+      worst_position = std::max(worst_position, position);
+      worst_energy = std::max(worst_energy, energy);
+      if (number(r, "ref_contact_pairs_differ") > 0) ++pair_differ_steps;
+    }
     ASSERT_EQ(r.count("forces"), 1u);
     EXPECT_EQ(r.at("forces"), "received") << "step " << r.at("step") << ": " << r.at("_message");
     if (r.at("forces") != "received") continue;
@@ -65,6 +86,11 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
   std::printf("%zu step reports: up to %d contacts, max residual %.2e, max relative difference to MuJoCo %.2e, "
               "max penetration %.4f m\n",
               reports.size(), max_contacts, worst_residual, worst_rel, deepest);
+  if (max_position_diff >= 0.0) {
+    std::printf("against MuJoCo's own run: bodies up to %.2e m apart, energies up to %.2e J, contact pairs differ on "
+                "%d steps\n", worst_position, worst_energy, pair_differ_steps);
+    EXPECT_LE(pair_differ_steps, max_pair_differ_steps);
+  }
   EXPECT_GT(max_contacts, 0);
   EXPECT_LT(worst_residual, 1e-9);
   EXPECT_LT(deepest, 0.02);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -91,6 +92,7 @@ std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSet
            readParam(pnh, "mujoco_iterations", &s->mujoco_iterations, "an integer"),
            readParam(pnh, "mujoco_tolerance", &s->mujoco_tolerance, "a number"),
            readParam(pnh, "compare", &s->compare, "true or false"),
+           readParam(pnh, "reference", &s->reference, "true or false"),
            readParam(pnh, "steps", &s->steps, "an integer"), readParam(pnh, "dt", &s->dt, "a number"),
            readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
            readParam(pnh, "include_limits", &s->include_limits, "true or false"),
@@ -208,6 +210,7 @@ bool MujocoBridgeNode::run() {
                             << " (" << m->opt.iterations << " iterations, tolerance " << m->opt.tolerance << ")");
   link_.publishClock(stepStamp(0, dt_));
   if (!link_.waitForSolver()) return false;
+  if (drive_ && settings_.reference) reference_ = world_->clone();
   link_.startRun();
   while (ros::ok() && (settings_.steps == 0 || counters_.steps < settings_.steps)) {
     step();
@@ -237,6 +240,7 @@ void MujocoBridgeNode::step() {
   totals_.last_energy = energy;
   totals_.last_penetration = penetration;
   totals_.max_penetration = std::max(totals_.max_penetration, penetration);
+  if (reference_) forwardReference();
 
   const ros::Time stamp = stepStamp(counters_.steps, dt_);
   link_.publishClock(stamp);
@@ -259,6 +263,7 @@ void MujocoBridgeNode::step() {
   }
   const std::string error = scene::integrateEuler(m, d);
   if (!error.empty()) throw std::runtime_error(error);  // checked at load; kept as a guard
+  if (reference_) stepReference();
   ++counters_.steps;
   statusLine(mp.ncon, mp.problem.rowCount());
 }
@@ -292,6 +297,12 @@ bool MujocoBridgeNode::exchange(const scene::MujocoProblem& mp, const ros::Time&
   addValue(&report, "penetration", totals_.last_penetration);
   addValue(&report, "energy", totals_.last_energy);
   if (mujoco_time >= 0.0) addValue(&report, "mujoco_solve_time", mujoco_time);
+  if (reference_) {
+    addValue(&report, "ref_position_diff", ref_position_diff_);
+    addValue(&report, "ref_energy", ref_energy_);
+    addValue(&report, "ref_contacts", ref_contacts_);
+    addValue(&report, "ref_contact_pairs_differ", ref_pairs_differ_);
+  }
 
   Eigen::VectorXd lambda;
   const std::string problem_text = receive(outcome, mp, &lambda);
@@ -387,6 +398,51 @@ void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::Vect
                                                                       : diagnostic_msgs::DiagnosticStatus::OK;
 }
 
+namespace {
+
+// The geom pairs in contact, ordered.
+std::vector<std::pair<int, int>> contactPairs(const mjData* d) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < d->ncon; ++i)
+    pairs.emplace_back(std::min(d->contact[i].geom1, d->contact[i].geom2),
+                       std::max(d->contact[i].geom1, d->contact[i].geom2));
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+}  // namespace
+
+// Both copies are at the same step, before its constraint solve: where the bodies are, the
+// energy, which geoms touch.
+void MujocoBridgeNode::forwardReference() {
+  mjModel* rm = reference_->model();
+  mjData* rd = reference_->data();
+  const mjData* d = world_->data();
+  scene::forwardToConstraints(rm, rd, true);
+  double worst = 0.0;
+  for (int b = 1; b < rm->nbody; ++b) {
+    double dist2 = 0.0;
+    for (int k = 0; k < 3; ++k) dist2 += std::pow(d->xpos[3 * b + k] - rd->xpos[3 * b + k], 2);
+    worst = std::max(worst, std::sqrt(dist2));
+  }
+  ref_position_diff_ = worst;
+  ref_energy_ = scene::totalEnergy(rm, rd);
+  ref_contacts_ = rd->ncon;
+  const auto ours = contactPairs(d), theirs = contactPairs(rd);
+  std::vector<std::pair<int, int>> differ;
+  std::set_symmetric_difference(ours.begin(), ours.end(), theirs.begin(), theirs.end(), std::back_inserter(differ));
+  ref_pairs_differ_ = static_cast<int>(differ.size());
+  totals_.max_ref_position_diff = std::max(totals_.max_ref_position_diff, worst);
+  totals_.max_ref_energy_diff = std::max(totals_.max_ref_energy_diff, std::abs(totals_.last_energy - ref_energy_));
+  if (ref_pairs_differ_ > 0) ++totals_.ref_contact_pair_steps_differ;
+}
+
+void MujocoBridgeNode::stepReference() {
+  const std::string error = scene::integrateEuler(reference_->model(), reference_->data());
+  if (!error.empty()) throw std::runtime_error(error);
+}
+
 void MujocoBridgeNode::statusLine(int contacts, int rows) {
   const double t = world_->data()->time;
   if (t + 1e-9 * dt_ < next_status_time_) return;
@@ -445,6 +501,10 @@ void MujocoBridgeNode::writeSummary(std::ostream& out) const {
        << totals_.last_energy << " J, penetration " << totals_.last_penetration << " m at the end, "
        << totals_.max_penetration << " m at most";
   if (m->nq >= 3 && m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE) text << ", root height " << d->qpos[2] << " m";
+  if (reference_)
+    text << "\nMuJoCo's own run beside (~reference): bodies up to " << totals_.max_ref_position_diff
+         << " m from theirs, energy up to " << totals_.max_ref_energy_diff << " J apart, contact pairs differ on "
+         << totals_.ref_contact_pair_steps_differ << " steps";
   text << '\n';
   out << text.str();
 }

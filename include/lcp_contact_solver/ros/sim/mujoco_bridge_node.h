@@ -52,6 +52,10 @@ struct MujocoBridgeSettings : LinkSettings {
   int mujoco_iterations = 3000;       // <= 0: the model's
   double mujoco_tolerance = 0.0;      // < 0: the model's
   bool compare = true;                // drive: also run MuJoCo's solver to report the difference
+  // drive: also step a second copy of the model from the same start with MuJoCo's own solver
+  // and report the distance to it each step (body positions, energy, contact pairs): the
+  // physics check where the forces differ by design (elliptic: MuJoCo's convex relaxation).
+  bool reference = false;
   int steps = 0;                      // steps to run; 0 = for ever (or ~duration)
   double dt = 0.0;                    // MuJoCo's timestep override (s); 0 = the model's
   int min_report_subscribers = 0;     // also wait for this many ~step_report subscribers (tests)
@@ -101,6 +105,10 @@ struct MujocoBridgeTotals {
   std::int64_t our_solves = 0;
   double mujoco_solve_time = 0.0;  // s, summed
   std::int64_t mujoco_solves = 0;
+  // ~reference: the largest distance of a body to its place in MuJoCo's own run (m), the
+  // largest energy difference (J), steps whose contact pairs differ from MuJoCo's.
+  double max_ref_position_diff = 0.0, max_ref_energy_diff = 0.0;
+  std::int64_t ref_contact_pair_steps_differ = 0;
 };
 
 class MujocoBridgeNode {
@@ -132,11 +140,19 @@ class MujocoBridgeNode {
   void compare(const lcs::scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
                diagnostic_msgs::DiagnosticStatus* report);
   void statusLine(int contacts, int rows);
+  // ~reference: forward the reference copy to its constraints (same step as ours) and
+  // compare; then, after our step, step it.
+  void forwardReference();
+  void stepReference();
 
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;
   MujocoBridgeSettings settings_;
   std::unique_ptr<lcs::scene::MujocoWorld> world_;
+  std::unique_ptr<lcs::scene::MujocoWorld> reference_;  // ~reference: MuJoCo's own run
+  // The reference's distance at the current step (for its ~step_report).
+  double ref_position_diff_ = 0.0, ref_energy_ = 0.0;
+  int ref_contacts_ = 0, ref_pairs_differ_ = 0;
   lcs::scene::MujocoExtractOptions extract_;
   bool drive_ = false;
   double dt_ = 0.005;
