@@ -68,6 +68,7 @@ ContactSolverNode::ContactSolverNode(const ros::NodeHandle& nh, const ros::NodeH
 }
 
 ContactSolverNode::~ContactSolverNode() {
+  if (input_spinner_) input_spinner_->stop();
   contacts_sub_.shutdown();
   compliance_sub_.shutdown();
   running_ = false;
@@ -83,15 +84,26 @@ void ContactSolverNode::setUpTopics() {
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   solve_service_ = pnh_.advertiseService("solve_contacts", &ContactSolverNode::onSolveService, this);
 
-  // The callbacks only hand the messages to inputs_ (cheap), so roscpp's queues hold little
-  // and the backlog is where it is counted; the pairs are solved on solver_thread_.
+  // The input callbacks only hand the messages to inputs_ (cheap) on a thread and callback
+  // queue of their own, so neither a solve nor the timers and services delay them, and
+  // roscpp's receive queues (which drop silently) stay short: the backlog is in inputs_,
+  // where it is counted. Found by the overload rostest on a loaded machine: with the input
+  // callbacks on the shared queue, a compliance dropped there became a "no_compliance".
   // TCP_NODELAY: without it the sender's kernel batches small messages (Nagle), and at
   // rates of ~1 kHz bursts overflow the queues (bench/soak.sh: a third of the pairs lost).
-  const int receive_queue = std::max(queue, 100);
-  contacts_sub_ = nh_.subscribe("contacts", receive_queue, &ContactSolverNode::onContacts, this,
-                                ros::TransportHints().tcpNoDelay());
-  compliance_sub_ = nh_.subscribe("compliance", receive_queue, &ContactSolverNode::onCompliance, this,
-                                  ros::TransportHints().tcpNoDelay());
+  constexpr int kReceiveQueue = 10000;  // ~10 s at 1 kHz before roscpp could drop one
+  ros::SubscribeOptions contacts = ros::SubscribeOptions::create<ContactArray>(
+      "contacts", kReceiveQueue, [this](const ContactArray::ConstPtr& m) { onContacts(m); }, ros::VoidPtr(),
+      &input_callbacks_);
+  contacts.transport_hints = ros::TransportHints().tcpNoDelay();
+  contacts_sub_ = nh_.subscribe(contacts);
+  ros::SubscribeOptions compliance = ros::SubscribeOptions::create<Compliance>(
+      "compliance", kReceiveQueue, [this](const Compliance::ConstPtr& m) { onCompliance(m); }, ros::VoidPtr(),
+      &input_callbacks_);
+  compliance.transport_hints = ros::TransportHints().tcpNoDelay();
+  compliance_sub_ = nh_.subscribe(compliance);
+  input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_callbacks_);
+  input_spinner_->start();
 
   const double period = std::min(0.25, active_.pairing_window / 4.0);
   // Wall time: the pairing window is about messages in transit, and with /use_sim_time a

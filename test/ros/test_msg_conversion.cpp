@@ -656,10 +656,11 @@ void expectAccounted(const InputCounts& c) {
 TEST(InputQueue, PairsByStampInEitherOrderAndReportsOnlyArraysWaitingPastTheWindow) {
   InputQueue queue(OverloadPolicy::kQueue, 10);
   const ros::Time now(10, 0);
+  // Stamps increase on each topic (going back would mean a restart).
   queue.addContacts(arrayAt(1), now);
   queue.addContacts(arrayAt(2), now);
-  queue.addCompliance(complianceAt(3), now);  // its array comes later
-  queue.addCompliance(complianceAt(2), now);
+  queue.addCompliance(complianceAt(2), now);  // array first
+  queue.addCompliance(complianceAt(3), now);  // compliance first: its array comes next
   queue.addContacts(arrayAt(3), now);
   EXPECT_TRUE(queue.takeExpired(ros::Time(10, 400000000), 0.5).empty());
   const auto expired = queue.takeExpired(ros::Time(10, 600000000), 0.5);

@@ -18,6 +18,7 @@
 #include <lcp_contact_solver/ContactArray.h>
 #include <lcp_contact_solver/ContactSolverConfig.h>
 #include <lcp_contact_solver/SolveContacts.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 
 #include <boost/thread/recursive_mutex.hpp>
@@ -108,6 +109,8 @@ class ContactSolverNode {
   ros::Publisher stats_pub_;
   ros::Publisher markers_pub_;
   ros::ServiceServer solve_service_;
+  ros::CallbackQueue input_callbacks_;  // contacts and compliance only, served by input_spinner_
+  std::unique_ptr<ros::AsyncSpinner> input_spinner_;
   ros::Subscriber contacts_sub_;
   ros::Subscriber compliance_sub_;
 
