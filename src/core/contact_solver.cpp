@@ -628,6 +628,10 @@ SolveResult ContactSolver::solve(const Problem& input) {
     result.forces = Eigen::VectorXd::Zero(base.rowCount());
     result.d = base.d_free;
     result.states.assign(base.contacts.size(), ContactState::kOpen);
+    // The residual of what is returned (zero forces), as for every other result: found by
+    // fuzzing, it was left at 0, which read as an exact answer.
+    result.residual = naturalMapResidual(base, effectiveMu(base, params_.mu), result.forces, result.d,
+                                         std::vector<bool>(base.contacts.size(), false));
     result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
     return result;
   }

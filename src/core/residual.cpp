@@ -21,7 +21,9 @@ inline double norm2(double a, double b) {
 // goes to the nearest boundary ray: r_n' = (r_n + mu |r_t|) / (1 + mu²), r_t' = mu r_n' r_t/|r_t|.
 void projectOntoCone(double mu, double* r) {
   const double rt = norm2(r[1], r[2]);
-  if (rt <= mu * r[0]) return;
+  // Inside: also r_n >= 0, or with μ = 0 (the cone is the ray t = 0, n >= 0) a point with
+  // r_n < 0 would pass 0 <= μ r_n and be kept (found by fuzzing the μ = 0 residual).
+  if (rt <= mu * r[0] && r[0] >= 0.0) return;
   if (mu * rt <= -r[0]) {
     r[0] = r[1] = r[2] = 0.0;
     return;
@@ -78,6 +80,12 @@ double contactErrorSquared(const Contact& c, double mu, const double* lambda, co
       return contactErrorSquared(sliding, mu, lambda, d) + extendedErrorSquared(c, lambda, d);
     }
     case ContactType::kFrictional: {
+      if (mu == 0.0) {
+        // The cone is the normal ray: e = (min(λ_n, d_n), λ_t). Written apart so that a huge
+        // tangential velocity (μ · |d_t| = 0 · inf) cannot turn an exact answer into NaN.
+        const double e = std::min(lambda[0], d[0]);
+        return e * e + lambda[1] * lambda[1] + lambda[2] * lambda[2];
+      }
       // De Saxcé's modified velocity makes the Coulomb law a cone complementarity problem.
       const double dt = norm2(d[1], d[2]);
       const double dn = d[0] + mu * dt;
@@ -85,7 +93,9 @@ double contactErrorSquared(const Contact& c, double mu, const double* lambda, co
       // x inside the cone: Proj(x) = x and e = λ − x is the modified velocity itself. Use it
       // as is: λ − (λ − d) cancels to 0 when |d| is below λ's rounding (forces of 1e6 N,
       // velocities of 1e-10 m), which would report an exact solution that is not one.
-      if (norm2(x[1], x[2]) <= mu * x[0]) return dn * dn + d[1] * d[1] + d[2] * d[2];
+      // x_n >= 0 as well: with μ = 0 the cone is the ray t = 0, n >= 0, and 0 <= μ x_n
+      // alone would take a separating x (x_n < 0) for one inside it (found by fuzzing).
+      if (x[0] >= 0.0 && norm2(x[1], x[2]) <= mu * x[0]) return dn * dn + d[1] * d[1] + d[2] * d[2];
       projectOntoCone(mu, x);
       double sum = 0.0;
       for (int k = 0; k < 3; ++k) sum += (lambda[k] - x[k]) * (lambda[k] - x[k]);

@@ -205,5 +205,26 @@ TEST(Analytic, ConeProjection) {
   EXPECT_NEAR(outside[0], (1.0 + 0.5 * 2.0) / 1.25, 1e-15);
 }
 
+TEST(Analytic, ZeroFrictionConeIsTheNormalRay) {
+  // μ = 0: the cone is {t = 0, n >= 0}; a point with n < 0 projects to the apex.
+  double below[3] = {-2.0, 0.0, 0.0};
+  projectOntoCone(0.0, below);
+  EXPECT_EQ(below[0], 0.0);
+  double sliding[3] = {3.0, 1.0, -1.0};
+  projectOntoCone(0.0, sliding);
+  EXPECT_EQ(sliding[0], 3.0);
+  EXPECT_EQ(sliding[1], 0.0);
+  EXPECT_EQ(sliding[2], 0.0);
+  // A separating μ = 0 contact with no force is an exact solution (residual 0), in the
+  // residual every result reports (a fuzzer found it reported as 1).
+  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity() * 2.0, Eigen::Vector3d(2.0, 0.0, 0.0), 0.0);
+  for (SolverKind kind : {SolverKind::kPgs, SolverKind::kNlgs, SolverKind::kAuto}) {
+    const SolveResult r = solveProblem(p, tight(kind));
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind);
+    EXPECT_EQ(r.forces.norm(), 0.0);
+    EXPECT_EQ(r.residual, 0.0) << solverName(kind);
+  }
+}
+
 }  // namespace
 }  // namespace lcp_contact_solver

@@ -87,6 +87,10 @@ TEST(ContactTypes, OtherSolversSayTheyDoNotApply) {
     EXPECT_EQ(r.status, SolveStatus::kNotApplicable) << solverName(kind);
     EXPECT_NE(r.message.find("torsional"), std::string::npos) << r.message;
     EXPECT_TRUE(r.forces.allFinite());
+    // The residual is that of the zero forces returned (a pressed contact: far from 0).
+    EXPECT_GT(r.residual, 0.1) << solverName(kind);
+    const Problem p = oneContact(ContactType::kTorsional, w, d);
+    EXPECT_EQ(r.residual, naturalMapResidual(p, effectiveMu(p, params.mu), r.forces, r.d, {}));
   }
 }
 
