@@ -12,6 +12,15 @@ namespace {
 
 constexpr int kConeSegments = 12;
 
+bool finitePoint(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+bool finiteMarker(const visualization_msgs::Marker& m) {
+  if (!finitePoint(m.pose.position) || !std::isfinite(m.scale.x) || !std::isfinite(m.scale.y) ||
+      !std::isfinite(m.scale.z))
+    return false;
+  return std::all_of(m.points.begin(), m.points.end(), finitePoint);
+}
+
 // Force arrows: magenta, apart from every state colour and every body colour.
 const std_msgs::ColorRGBA kForceArrowColor = rgba(1.0f, 0.0f, 1.0f);
 
@@ -65,9 +74,13 @@ void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFra
     if (rows > 1) force += l[1] * f.tangent1;
     if (rows > 2) force += l[2] * f.tangent2;
     if (force.norm() == 0.0) continue;  // an arrow of length zero is invisible anyway
+    // A finite but huge force times the scale can overflow: no arrow then, never an inf
+    // point (found by fuzzing).
+    const Eigen::Vector3d tip = f.position + options.force_arrow_scale * force;
+    if (!tip.allFinite()) continue;
     auto m = baseMarker(header, kNsForces, static_cast<int>(i), visualization_msgs::Marker::ARROW, options);
     m.points.push_back(toPoint(f.position));
-    m.points.push_back(toPoint(f.position + options.force_arrow_scale * force));
+    m.points.push_back(toPoint(tip));
     // One colour for every arrow, none of the state colours: the sphere at its foot says
     // the state, the arrow only the force. Thick enough to read from a metre away.
     m.scale.x = 0.2 * options.cone_height;  // shaft diameter
@@ -162,6 +175,11 @@ visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header, con
   addForceArrows(header, frames, problem, result, options, &markers);
   markers.markers.push_back(frictionCones(header, frames, problem, result, mu, options));
   addHeatmaps(header, problem, result, options, &markers);
+  // The last guard: a marker with a non-finite number (finite inputs whose products
+  // overflow, e.g. a huge μ times the cone height) is left out, never published.
+  auto& list = markers.markers;
+  list.erase(std::remove_if(list.begin(), list.end(), [](const visualization_msgs::Marker& m) { return !finiteMarker(m); }),
+             list.end());
   return markers;
 }
 
