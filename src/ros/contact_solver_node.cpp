@@ -262,7 +262,7 @@ void ContactSolverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("solves", health_.solves);
   status.add("non-converged solves", health_.not_converged);
   status.add("rejected inputs", health_.rejected);
-  status.add("unpaired contact arrays", health_.unpaired);
+  status.add("unpaired contact arrays", inputs.unpaired);
   // Every ContactArray received is in exactly one of the five counts below.
   status.add("contact arrays received", inputs.arrays_received);
   status.add("outcome: solved", health_.solves);
@@ -352,7 +352,6 @@ void ContactSolverNode::logCycle(const lcs::Problem& problem, const lcs::SolveRe
 void ContactSolverNode::reportUnsolved(const UnsolvedInput& input) {
   {
     std::lock_guard<std::mutex> lock(health_mutex_);
-    ++(input.behind ? health_.dropped : health_.unpaired);
     ++health_.problems_since_report;
   }
   static std::atomic<double> last_warning{0.0};

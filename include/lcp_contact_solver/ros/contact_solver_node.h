@@ -50,8 +50,6 @@ class ContactSolverNode {
     std::uint64_t solves = 0;
     std::uint64_t not_converged = 0;
     std::uint64_t rejected = 0;
-    std::uint64_t unpaired = 0;
-    std::uint64_t dropped = 0;
     double max_latency = 0.0;     // since the last report, s
     double max_queue_time = 0.0;  // since the last report, s
     std::uint64_t problems_since_report = 0;  // rejections, unpaired, failed solves
