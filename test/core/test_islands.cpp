@@ -8,6 +8,7 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "hard_case_util.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -65,24 +66,6 @@ Generated generate(int groups, int per_group, Kinds kinds, unsigned seed, double
   return g;
 }
 
-Problem blockSparse(const Problem& dense_problem) {
-  Problem p = dense_problem;
-  const Eigen::MatrixXd W = toDense(dense_problem.W);
-  const std::vector<int> off = dense_problem.rowOffsets();
-  std::vector<int> sizes;
-  for (const Contact& c : dense_problem.contacts) sizes.push_back(c.rows);
-  BlockSparseMatrix S = BlockSparseMatrix::withBlockSizes(sizes);
-  for (std::size_t i = 0; i < sizes.size(); ++i) {
-    S.beginRow();
-    for (std::size_t j = 0; j < sizes.size(); ++j) {
-      const Eigen::MatrixXd block = W.block(off[i], off[j], sizes[i], sizes[j]);
-      if (i == j || block.cwiseAbs().maxCoeff() > 0.0) S.addBlock(static_cast<int>(j), block);
-    }
-  }
-  p.W = S;
-  return p;
-}
-
 SolverParams paramsFor(SolverKind kind, double tolerance, int max_it, bool islands, int threads = 1) {
   SolverParams p;
   p.solver = kind;
@@ -109,7 +92,7 @@ double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces, doubl
 TEST(Islands, FindsTheGroupsOfInterleavedContacts) {
   for (bool sparse : {false, true}) {
     Generated g = generate(5, 6, Kinds::kMixed, 3);
-    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
     const Islands islands = findIslands(p);
     ASSERT_EQ(islands.count(), 5) << (sparse ? "block-sparse" : "dense");
     for (std::size_t i = 0; i < p.contacts.size(); ++i)
@@ -127,7 +110,7 @@ TEST(Islands, FindsTheGroupsOfInterleavedContacts) {
 TEST(Islands, OneGroupIsOneIsland) {
   Generated g = generate(1, 12, Kinds::kFrictional, 4);
   EXPECT_EQ(findIslands(g.problem).count(), 1);
-  EXPECT_EQ(findIslands(blockSparse(g.problem)).count(), 1);
+  EXPECT_EQ(findIslands(hard::toBlockSparse(g.problem)).count(), 1);
 }
 
 TEST(Islands, IslandProblemKeepsTheRowsOfItsContacts) {
@@ -135,7 +118,7 @@ TEST(Islands, IslandProblemKeepsTheRowsOfItsContacts) {
   const Islands islands = findIslands(g.problem);
   const std::vector<int> off = g.problem.rowOffsets();
   const Eigen::MatrixXd W = toDense(g.problem.W);
-  for (const Problem& p : {g.problem, blockSparse(g.problem)}) {
+  for (const Problem& p : {g.problem, hard::toBlockSparse(g.problem)}) {
     const Problem sub = islandProblem(p, off, islands.contacts[1]);
     std::vector<int> rows;
     for (int i : islands.contacts[1])
@@ -152,7 +135,7 @@ TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
   for (bool sparse : {false, true}) {
     for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
       Generated g = generate(4, 5, kind == SolverKind::kPgs ? Kinds::kFrictionless : Kinds::kMixed, 6);
-      const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+      const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
       const SolveResult whole = solveProblem(p, paramsFor(kind, 1e-300, 37, false));
       const SolveResult split = solveProblem(p, paramsFor(kind, 1e-300, 37, true));
       EXPECT_EQ(whole.iterations, 37);
@@ -169,7 +152,7 @@ TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
 TEST(Islands, UniqueSolutionsEqualTheWholeProblem) {
   for (bool sparse : {false, true}) {
     Generated g = generate(6, 5, Kinds::kFrictionless, 7, 0.05);
-    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
     const SolveResult reference = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-12, 100000, false));
     ASSERT_TRUE(reference.converged) << reference.message;
     for (SolverKind kind : {SolverKind::kPgs, SolverKind::kLemke, SolverKind::kNewton, SolverKind::kApgd}) {
@@ -200,7 +183,7 @@ TEST(Islands, ConvergedMeansTheWholeResidualMeetsTheTolerance) {
 TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
   for (bool sparse : {false, true}) {
     Generated g = generate(40, 4, Kinds::kMixed, 9);  // > 200 rows: the pool runs
-    const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+    const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
     for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kNewton, SolverKind::kApgd, SolverKind::kAuto}) {
       const SolveResult one = solveProblem(p, paramsFor(kind, 1e-8, 100000, true, 1));
       for (int threads : {2, 3, 8, 0}) {
@@ -244,7 +227,7 @@ TEST(Islands, MessagesNameContactsOfTheWholeProblem) {
   W.row(k).setZero();
   W.col(k).setZero();
   g.problem.W = W;
-  for (const Problem& p : {g.problem, blockSparse(g.problem)}) {
+  for (const Problem& p : {g.problem, hard::toBlockSparse(g.problem)}) {
     const SolveResult r = solveProblem(p, paramsFor(SolverKind::kPgs, 1e-8, 1000, true));
     EXPECT_EQ(r.status, SolveStatus::kZeroDiagonal);
     EXPECT_NE(r.message.find("contact 9 (id 109)"), std::string::npos) << r.message;
@@ -325,7 +308,7 @@ TEST(SymmetricNewton, SolvesLcpsAndTheResidualOfItsForcesIsTheTolerance) {
   for (int groups : {1, 3, 40}) {  // 40 × 5 rows > the dense limit: the sparse LDLT path
     for (bool sparse : {false, true}) {
       Generated g = generate(groups, 5, Kinds::kFrictionless, 11 + groups, 1e-3);
-      const Problem p = sparse ? blockSparse(g.problem) : g.problem;
+      const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
       const SolveResult r = solveProblem(p, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
       ASSERT_TRUE(r.converged) << r.message;
       EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
