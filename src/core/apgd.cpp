@@ -172,8 +172,8 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   KernelReport report;
   const int n = problem.rowCount();
   const std::vector<ContactSet> sets = contactSets(ctx);
-  const double q_norm = problem.d_free.norm();
-  const double scale = q_norm > 0.0 ? q_norm : 1.0;
+  const double q_norm = problem.d_free.stableNorm();
+  const double scale = q_norm > 0.0 && std::isfinite(q_norm) ? q_norm : 1.0;
   const Eigen::VectorXd& q = problem.d_free;
 
   Eigen::VectorXd x = lambda, x_new(n), Wx(n), Wx_new(n), y(n), Wy(n), g(n), u(n), shift(n);

@@ -309,12 +309,12 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
     Island& isl = islands_[k];
     isl.contacts = std::move(islands.contacts[k]);
     isl.problem = buildIsland(problem, ctx.offsets, isl.contacts, islands.island_of, position);
-    norms[k] = isl.problem.d_free.norm();
+    norms[k] = isl.problem.d_free.stableNorm();
     for (int i : isl.contacts)
       for (int r = ctx.offsets[i]; r < ctx.offsets[i + 1]; ++r) isl.rows.push_back(r);
   }
-  const double whole = problem.d_free.norm();
-  const double scale = whole > 0.0 ? whole : 1.0;
+  const double whole = problem.d_free.stableNorm();
+  const double scale = whole > 0.0 && std::isfinite(whole) ? whole : 1.0;
   for (std::size_t k = 0; k < islands_.size(); ++k) {
     Island& isl = islands_[k];
     isl.params = params;

@@ -124,8 +124,8 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
         break;
     }
   }
-  const double q_norm = problem.d_free.norm();
-  const double residual = std::sqrt(sum) / (q_norm > 0.0 ? q_norm : 1.0);
+  const double q_norm = problem.d_free.stableNorm();
+  const double residual = std::sqrt(sum) / (q_norm > 0.0 && std::isfinite(q_norm) ? q_norm : 1.0);
   return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
 }
 

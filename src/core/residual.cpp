@@ -117,19 +117,36 @@ double contactErrorSquared(const Contact& c, double mu, const double* lambda, co
 
 }  // namespace
 
-double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
-                          const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
-                          const std::vector<bool>& ignored) {
+namespace {
+
+double errorSum(const Problem& problem, const std::vector<double>& mu, const double* lambda, const double* d,
+                const std::vector<bool>& ignored) {
   double sum = 0.0;
   int row = 0;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const Contact& c = problem.contacts[i];
-    if (!isIgnored(ignored, i)) sum += contactErrorSquared(c, mu[i], lambda.data() + row, d.data() + row);
+    if (!isIgnored(ignored, i)) sum += contactErrorSquared(c, mu[i], lambda + row, d + row);
     row += c.rows;
   }
-  const double q_norm = problem.d_free.norm();
-  const double scale = q_norm > 0.0 ? q_norm : 1.0;
-  const double residual = std::sqrt(sum) / scale;
+  return sum;
+}
+
+}  // namespace
+
+double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
+                          const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
+                          const std::vector<bool>& ignored) {
+  // stableNorm: |d_free| of 1e300 must not overflow to inf (the residual would read 0).
+  const double q_norm = problem.d_free.stableNorm();
+  const double scale = q_norm > 0.0 && std::isfinite(q_norm) ? q_norm : 1.0;
+  double residual = std::sqrt(errorSum(problem, mu, lambda.data(), d.data(), ignored)) / scale;
+  if (!std::isfinite(residual) && scale > 1.0) {
+    // Every contact's error is positively homogeneous in (λ, d) (cones, min-maps, bilateral
+    // rows), so measured on (λ, d) / |d_free| it is the same ratio without squaring values
+    // of 1e284 (found by fuzzing: an exact answer to a 1e300 problem read as DBL_MAX).
+    const Eigen::VectorXd lambda_scaled = lambda / scale, d_scaled = d / scale;
+    residual = std::sqrt(errorSum(problem, mu, lambda_scaled.data(), d_scaled.data(), ignored));
+  }
   // An overflowed sum must still read as "far from converged", never NaN.
   return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
 }

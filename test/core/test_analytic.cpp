@@ -226,5 +226,34 @@ TEST(Analytic, ZeroFrictionConeIsTheNormalRay) {
   }
 }
 
+TEST(Analytic, ResidualOfAHugeProblemIsScaledNotOverflowed) {
+  // Two frictionless rows at the scale of 1e300: λ = (0, 5e299) solves it exactly, yet
+  // d_2 = 2 λ_2 − 1e300 keeps a rounding error near 1e284, whose square overflows. The
+  // residual is relative to |d_free|, so it must read ~1e-16, not DBL_MAX (found by
+  // fuzzing: an exact answer reported as "converged with residual DBL_MAX"), and a wrong
+  // answer must still read ~1, not 0 (|d_free|² overflowing would divide by inf).
+  Problem p;
+  p.contacts.push_back(Contact{1, ContactType::kFrictionless, 1, 0.0});
+  p.contacts.push_back(Contact{2, ContactType::kFrictionless, 1, 0.0});
+  Eigen::Matrix2d W;
+  W << 2.0, 1.0, 1.0, 2.0;
+  p.W = Eigen::MatrixXd(W);
+  p.d_free = Eigen::Vector2d(0.5, -1e300);
+  const std::vector<double> mu(2, 0.0);
+  const Eigen::VectorXd exact = Eigen::Vector2d(0.0, 5e299);
+  const Eigen::VectorXd d_exact = W * exact + p.d_free;
+  EXPECT_LT(naturalMapResidual(p, mu, exact, d_exact, {}), 1e-12);
+  const Eigen::VectorXd none = Eigen::Vector2d::Zero();
+  EXPECT_NEAR(naturalMapResidual(p, mu, none, p.d_free, {}), 1.0, 1e-12);
+  for (SolverKind kind : {SolverKind::kNewton, SolverKind::kAuto}) {
+    SolverParams params = tight(kind);
+    params.tolerance = 1e-10;
+    const SolveResult r = solveProblem(p, params);
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << solverName(kind);
+    EXPECT_LE(r.residual, 1e-10) << solverName(kind);
+    EXPECT_NEAR(r.forces[1], 5e299, 1e285) << solverName(kind);
+  }
+}
+
 }  // namespace
 }  // namespace lcp_contact_solver
