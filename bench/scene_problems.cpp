@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 namespace lcs_bench {
 namespace {
@@ -120,20 +121,27 @@ sc::SceneParams generationParams(const std::string& yaml) {
 
 }  // namespace
 
+sc::Scene makeBenchScene(const std::string& scenes_dir, const std::string& family, int size) {
+  if (family == "box_pyramid")
+    return sc::loadSceneFromUrdfString(pyramidUrdf(size), generationParams(scenes_dir + "/box_stack.yaml"),
+                                       "box_pyramid");
+  if (family == "sphere_pile") {
+    int side = 0;
+    return sc::loadSceneFromUrdfString(pileUrdf(size, &side), generationParams(scenes_dir + "/sphere_pile.yaml"),
+                                       "sphere_pile");
+  }
+  throw std::invalid_argument("unknown scene family '" + family + "' (box_pyramid or sphere_pile)");
+}
+
 std::vector<SceneProblem> makeSceneProblems(const std::string& scenes_dir, const std::vector<int>& pyramid_bases,
                                             const std::vector<int>& pile_balls, int steps) {
   std::vector<SceneProblem> out;
-  const sc::SceneParams box_params = generationParams(scenes_dir + "/box_stack.yaml");
-  for (int base : pyramid_bases) {
-    sc::Scene scene = sc::loadSceneFromUrdfString(pyramidUrdf(base), box_params, "box_pyramid");
-    out.push_back(runAndTake("box_pyramid_B" + std::to_string(base), "box_stack", std::move(scene), steps));
-  }
-  const sc::SceneParams pile_params = generationParams(scenes_dir + "/sphere_pile.yaml");
-  for (int n : pile_balls) {
-    int side = 0;
-    sc::Scene scene = sc::loadSceneFromUrdfString(pileUrdf(n, &side), pile_params, "sphere_pile");
-    out.push_back(runAndTake("sphere_pile_" + std::to_string(n), "sphere_pile", std::move(scene), steps));
-  }
+  for (int base : pyramid_bases)
+    out.push_back(runAndTake("box_pyramid_B" + std::to_string(base), "box_stack",
+                             makeBenchScene(scenes_dir, "box_pyramid", base), steps));
+  for (int n : pile_balls)
+    out.push_back(runAndTake("sphere_pile_" + std::to_string(n), "sphere_pile",
+                             makeBenchScene(scenes_dir, "sphere_pile", n), steps));
   return out;
 }
 

@@ -16,6 +16,7 @@
 #pragma once
 
 #include "lcp_contact_solver/core/problem.h"
+#include "lcp_contact_solver/scene/scene.h"
 
 #include <string>
 #include <vector>
@@ -38,5 +39,10 @@ struct SceneProblem {
 std::vector<SceneProblem> makeSceneProblems(const std::string& scenes_dir,
                                             const std::vector<int>& pyramid_bases,
                                             const std::vector<int>& pile_balls, int steps);
+
+// The scene behind one of those problems before its first step: family "box_pyramid" (size =
+// bricks at the base) or "sphere_pile" (size = balls), parameters from the shipped scene,
+// in-process solver nlgs at 1e-6. Throws std::invalid_argument for another family.
+lcp_contact_solver::scene::Scene makeBenchScene(const std::string& scenes_dir, const std::string& family, int size);
 
 }  // namespace lcs_bench

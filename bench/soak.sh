@@ -123,7 +123,7 @@ else
   status=1
 fi
 echo "soak: load average $(cut -d' ' -f1-3 /proc/loadavg) at the end" | tee -a "$log"
-grep -E '^(soak_feeder|summary|failures)' "$log"
+grep -E '^(soak_feeder|summary|failures|latency)' "$log"
 awk -F, -v half="$(awk "BEGIN {print $duration / 2}")" '
   NR == 1 { next }
   { t = $1; r = $2; if (r > max) max = r; last_t = t; last = r

@@ -10,7 +10,10 @@
 //
 // Defaults: 1000 Hz, 300 s, stats from contact_solver/stats; the topics are remappable.
 // Prints a line per second (bench/soak.sh reads `forces N` from it) and a summary; the
-// failures are stats with success false, by status.
+// failures are stats with success false, by status. Latency: each pair's stamp is the wall
+// time it was published, so a ConstraintForces message received carries its own start time;
+// the summary gives the percentiles of (arrival − stamp) over all forces received, and each
+// per-second line the median and p99 of that second.
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ConstraintForces.h>
 #include <lcp_contact_solver/ContactArray.h>
@@ -19,9 +22,12 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
+#include <algorithm>
 #include <atomic>
+#include <mutex>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -68,6 +74,14 @@ std::vector<Pair> readPairs(const std::string& path) {
   return pairs;
 }
 
+// The q-quantile (nearest rank) of *values, reordered in place; NaN when empty.
+double percentile(std::vector<double>* values, double q) {
+  if (values->empty()) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t k = std::min(values->size() - 1, static_cast<std::size_t>(q * values->size()));
+  std::nth_element(values->begin(), values->begin() + k, values->end());
+  return (*values)[k];
+}
+
 int usage() {
   std::fprintf(stderr, "usage: soak_feeder BAG [--rate HZ] [--duration S] [--stats TOPIC]\n");
   return 2;
@@ -109,8 +123,19 @@ int main(int argc, char** argv) {
   std::atomic<long> forces{0}, stats{0}, failures{0};
   std::map<std::string, long> failed_by_status;  // written by the spinner thread only, read after it stops
   const ros::TransportHints no_delay = ros::TransportHints().tcpNoDelay();
+  std::mutex latency_mutex;
+  std::vector<double> latencies, second_latencies;  // s; all, and since the last report line
   ros::Subscriber forces_sub = nh.subscribe<ConstraintForces>(
-      "constraint_forces", 1000, [&](const ConstraintForces::ConstPtr&) { ++forces; }, ros::VoidConstPtr(), no_delay);
+      "constraint_forces", 1000,
+      [&](const ConstraintForces::ConstPtr& f) {
+        const ros::WallTime now = ros::WallTime::now();
+        const double latency = now.toSec() - f->header.stamp.toSec();
+        ++forces;
+        std::lock_guard<std::mutex> lock(latency_mutex);
+        latencies.push_back(latency);
+        second_latencies.push_back(latency);
+      },
+      ros::VoidConstPtr(), no_delay);
   ros::Subscriber stats_sub = nh.subscribe<SolverStats>(
       stats_topic, 1000,
       [&](const SolverStats::ConstPtr& s) {
@@ -121,8 +146,10 @@ int main(int argc, char** argv) {
         }
       },
       ros::VoidConstPtr(), no_delay);
-  ros::Publisher contacts_pub = nh.advertise<ContactArray>("contacts", 100);
-  ros::Publisher compliance_pub = nh.advertise<Compliance>("compliance", 100);
+  // A second of input on each queue: a message lost here, at the sender, would reach the node
+  // as an unpaired half and be counted against it.
+  ros::Publisher contacts_pub = nh.advertise<ContactArray>("contacts", 1000);
+  ros::Publisher compliance_pub = nh.advertise<Compliance>("compliance", 1000);
   // Callbacks in their own thread, so counting never delays the publishing loop.
   ros::AsyncSpinner spinner(1);
   spinner.start();
@@ -160,8 +187,14 @@ int main(int argc, char** argv) {
     contacts_pub.publish(p.contacts);
     ++sent;
     if (elapsed - last_report >= 1.0) {
-      std::printf("t %5.0f s  sent %9ld  rate %7.1f Hz  forces %9ld  stats %9ld  failures %6ld\n", elapsed, sent,
-                  (sent - sent_at_report) / (elapsed - last_report), forces.load(), stats.load(), failures.load());
+      std::vector<double> second;
+      {
+        std::lock_guard<std::mutex> lock(latency_mutex);
+        second.swap(second_latencies);
+      }
+      std::printf("t %5.0f s  sent %9ld  rate %7.1f Hz  forces %9ld  stats %9ld  failures %6ld  latency p50 %.3f p99 %.3f ms\n",
+                  elapsed, sent, (sent - sent_at_report) / (elapsed - last_report), forces.load(), stats.load(),
+                  failures.load(), 1e3 * percentile(&second, 0.5), 1e3 * percentile(&second, 0.99));
       std::fflush(stdout);
       sent_at_report = sent;
       last_report = elapsed;
@@ -179,5 +212,10 @@ int main(int argc, char** argv) {
               "stats received %ld, failures %ld, unanswered %ld\n",
               sent, total, sent / total, rate, forces.load(), stats.load(), failures.load(), sent - stats.load());
   for (const auto& [status, n] : failed_by_status) std::printf("failures: %ld %s\n", n, status.c_str());
+  std::lock_guard<std::mutex> lock(latency_mutex);
+  std::printf("latency (publish to forces received, ms, %zu forces): p50 %.3f  p90 %.3f  p99 %.3f  p99.9 %.3f  max %.3f\n",
+              latencies.size(), 1e3 * percentile(&latencies, 0.5), 1e3 * percentile(&latencies, 0.9),
+              1e3 * percentile(&latencies, 0.99), 1e3 * percentile(&latencies, 0.999),
+              1e3 * percentile(&latencies, 1.0));
   return stats.load() > 0 ? 0 : 1;
 }
