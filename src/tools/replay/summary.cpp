@@ -26,7 +26,7 @@ std::string formatSummary(const ReplayResult& r) {
   }
   const Comparison& c = r.comparison;
   if (r.forces_topic.empty()) {
-    out << "forces: no recorded forces in the bag, nothing compared\n";
+    if (r.reference_topic.empty()) out << "forces: no recorded forces in the bag, nothing compared\n";
   } else {
     out << "forces vs recorded " << r.forces_topic << ": " << c.compared << " cycles compared";
     if (c.compared > 0) {
