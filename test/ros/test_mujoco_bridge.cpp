@@ -7,10 +7,14 @@
 //     same model beside ours), the physics agree where the forces differ by design: every
 //     body within ~max_position_diff of its place in MuJoCo's run, the energies within
 //     ~max_energy_diff, the same geom pairs in contact on all but ~max_pair_differ_steps steps;
+//   - MuJoCo's own forces, published on ~reference_forces for every step with contacts, come
+//     in the node's layout (the ids and rows of the node's constraint_forces of that stamp)
+//     and, when ~max_rel_diff >= 0, agree with the node's within it, as the report says;
 //   - the humanoid stays on the floor (penetration below 2 cm: MuJoCo's soft contacts give
 //     ~1.2 cm on the landing).
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <gtest/gtest.h>
+#include <lcp_contact_solver/ConstraintForces.h>
 #include <ros/ros.h>
 
 #include <algorithm>
@@ -51,6 +55,13 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
         r["_message"] = msg->message;
         reports.push_back(r);
       });
+  using lcp_contact_solver::ConstraintForces;
+  std::map<ros::Time, ConstraintForces::ConstPtr> ours, mujocos;
+  ros::Subscriber ours_sub = nh.subscribe<ConstraintForces>(
+      "/constraint_forces", 1000, [&ours](const ConstraintForces::ConstPtr& msg) { ours[msg->header.stamp] = msg; });
+  ros::Subscriber mujoco_sub = nh.subscribe<ConstraintForces>(
+      "/mujoco_bridge/reference_forces", 1000,
+      [&mujocos](const ConstraintForces::ConstPtr& msg) { mujocos[msg->header.stamp] = msg; });
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(100.0);
   while (ros::ok() && ros::WallTime::now() < end && static_cast<int>(reports.size()) < min_reports) {
     ros::spinOnce();
@@ -91,6 +102,32 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
                 "%d steps\n", worst_position, worst_energy, pair_differ_steps);
     EXPECT_LE(pair_differ_steps, max_pair_differ_steps);
   }
+  // The reference: a subscriber that joined late misses the first steps, so most, not all.
+  EXPECT_GE(mujocos.size(), reports.size() / 2);
+  double worst_reference_rel = 0.0;
+  std::size_t matched = 0;
+  for (const auto& [stamp, theirs] : mujocos) {
+    const auto it = ours.find(stamp);
+    if (it == ours.end()) continue;  // the node's forces of that step were missed
+    const ConstraintForces& mine = *it->second;
+    ASSERT_EQ(mine.forces.size(), theirs->forces.size()) << "stamp " << stamp;
+    double scale = 0.0, diff = 0.0;
+    for (std::size_t i = 0; i < mine.forces.size(); ++i) {
+      ASSERT_EQ(mine.forces[i].id, theirs->forces[i].id) << "stamp " << stamp << ", contact " << i;
+      ASSERT_EQ(mine.forces[i].lambda.size(), theirs->forces[i].lambda.size()) << "stamp " << stamp;
+      for (std::size_t k = 0; k < mine.forces[i].lambda.size(); ++k) {
+        scale = std::max({scale, std::abs(mine.forces[i].lambda[k]), std::abs(theirs->forces[i].lambda[k])});
+        diff = std::max(diff, std::abs(mine.forces[i].lambda[k] - theirs->forces[i].lambda[k]));
+      }
+    }
+    ++matched;
+    const double rel = scale > 0.0 ? diff / scale : 0.0;
+    worst_reference_rel = std::max(worst_reference_rel, rel);
+    if (max_rel_diff >= 0.0) EXPECT_LE(rel, max_rel_diff) << "stamp " << stamp;
+  }
+  EXPECT_GE(matched, mujocos.size() / 2);
+  std::printf("%zu reference forces from MuJoCo, %zu matched with the node's: max relative difference %.2e\n",
+              mujocos.size(), matched, worst_reference_rel);
   EXPECT_GT(max_contacts, 0);
   EXPECT_LT(worst_residual, 1e-9);
   EXPECT_LT(deepest, 0.02);

@@ -45,15 +45,16 @@ std::string joined(const std::vector<std::string>& items) {
 
 // Finds the topic of type M: `requested` (exact, leading '/' optional), else the default
 // name, else the only topic of that type. "" when there is none and it is optional.
+// `exclude` (may be empty) is never chosen by name or type.
 template <typename M>
 std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& requested,
                         const std::string& default_name, const std::string& option, bool required,
-                        std::vector<std::string>* notes, std::string* error) {
+                        std::vector<std::string>* notes, std::string* error, const std::string& exclude = "") {
   const std::string type = TopicChoice<M>::type();
   std::set<std::string> all_topics, typed_topics;
   for (const rosbag::ConnectionInfo* c : connections) {
     all_topics.insert(c->topic);
-    if (c->datatype == type) typed_topics.insert(c->topic);
+    if (c->datatype == type && c->topic != exclude) typed_topics.insert(c->topic);
   }
   auto check = [&](const std::string& topic) -> std::string {
     for (const rosbag::ConnectionInfo* c : connections) {
@@ -72,7 +73,7 @@ std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connec
   };
   const std::string wanted = normalizeTopic(requested.empty() ? default_name : requested);
   for (const std::string& topic : all_topics)
-    if (normalizeTopic(topic) == wanted) return check(topic);
+    if (normalizeTopic(topic) == wanted && (topic != exclude || !requested.empty())) return check(topic);
   if (!requested.empty()) {
     *error = "no topic " + wanted + " in the bag (topics: " +
              joined(std::vector<std::string>(all_topics.begin(), all_topics.end())) + ")";
@@ -130,6 +131,8 @@ struct Reference {
   std::map<ros::Time, ConstraintForces::ConstPtr> forces;
   std::map<ros::Time, SolverStats::ConstPtr> stats;
   std::set<ros::Time> used_forces;
+  std::map<ros::Time, ConstraintForces::ConstPtr> outside;  // reference_topic
+  std::set<ros::Time> used_outside;
 };
 
 class Replayer {
@@ -155,6 +158,10 @@ class Replayer {
     if (!r_.error.empty()) return;
     finishUnpaired();
     countUnusedReference();
+    if (out_ && options_.copy_inputs && !r_.reference_topic.empty()) {  // the output stays a reference bag
+      rosbag::View view(bag, rosbag::TopicQuery(r_.reference_topic));
+      for (const rosbag::MessageInstance& m : view) out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+    }
     if (out_) {
       out_->close();
       out_.reset();
@@ -172,14 +179,22 @@ class Replayer {
     if (error.empty())
       r_.compliance_topic = chooseTopic<Compliance>(connections, options_.compliance_topic, kDefaultCompliance,
                                                     "--compliance-topic", true, &r_.notes, &error);
+    if (error.empty() && !options_.reference_topic.empty())
+      r_.reference_topic = chooseTopic<ConstraintForces>(connections, options_.reference_topic, "",
+                                                         "--reference-topic", true, &r_.notes, &error);
     if (error.empty())
       r_.forces_topic = chooseTopic<ConstraintForces>(connections, options_.forces_topic, kDefaultForces,
-                                                      "--forces-topic", false, &r_.notes, &error);
+                                                      "--forces-topic", false, &r_.notes, &error, r_.reference_topic);
+    if (error.empty() && !r_.reference_topic.empty() && r_.reference_topic == r_.forces_topic)
+      error = r_.reference_topic + " cannot be both the recorded output and the reference";
     if (error.empty())
       r_.stats_topic = chooseTopic<SolverStats>(connections, options_.stats_topic, kDefaultStats, "--stats-topic",
                                                 false, &r_.notes, &error);
     if (!error.empty()) return false;
-    if (r_.forces_topic.empty()) r_.notes.push_back("no recorded ConstraintForces in the bag: nothing to compare with");
+    if (r_.forces_topic.empty())
+      r_.notes.push_back(r_.reference_topic.empty() ? "no recorded ConstraintForces in the bag: nothing to compare with"
+                                                    : "no recorded output of the node in the bag: only the reference "
+                                                      "is compared with");
     r_.out_forces_topic = r_.forces_topic.empty() ? normalizeTopic(kDefaultForces) : r_.forces_topic;
     r_.out_stats_topic = r_.stats_topic.empty() ? normalizeTopic(kDefaultStats) : r_.stats_topic;
     rosbag::View contacts(bag, rosbag::TopicQuery(r_.contacts_topic));
@@ -191,13 +206,14 @@ class Replayer {
     std::vector<std::string> topics;
     if (!r_.forces_topic.empty()) topics.push_back(r_.forces_topic);
     if (!r_.stats_topic.empty()) topics.push_back(r_.stats_topic);
+    if (!r_.reference_topic.empty()) topics.push_back(r_.reference_topic);
     if (topics.empty()) return true;
     rosbag::View view(bag, rosbag::TopicQuery(topics));
     for (const rosbag::MessageInstance& m : view) {
-      if (m.getTopic() == r_.forces_topic) {
+      if (m.getTopic() == r_.forces_topic || m.getTopic() == r_.reference_topic) {
         ConstraintForces::ConstPtr msg = m.instantiate<ConstraintForces>();
-        if (!msg) return fail("a message on " + r_.forces_topic + " cannot be read");
-        ref_.forces[msg->header.stamp] = msg;
+        if (!msg) return fail("a message on " + m.getTopic() + " cannot be read");
+        (m.getTopic() == r_.forces_topic ? ref_.forces : ref_.outside)[msg->header.stamp] = msg;
       } else {
         SolverStats::ConstPtr msg = m.instantiate<SolverStats>();
         if (!msg) return fail("a message on " + r_.stats_topic + " cannot be read");
@@ -304,38 +320,19 @@ class Replayer {
   void compare(const CycleOutput& cycle, const ros::Time& stamp) {
     Comparison& c = r_.comparison;
     const long index = static_cast<long>(r_.cycles) - 1;
-    if (!r_.forces_topic.empty()) {
-      const auto ref = ref_.forces.find(stamp);
-      if (ref == ref_.forces.end()) {
-        if (cycle.has_forces) {
-          ++c.missing_reference;
-          if (c.first_mismatch.empty()) c.first_mismatch = "stamp " + stampDigits(stamp) + ": no recorded forces";
-        }
-      } else {
-        ref_.used_forces.insert(stamp);
-        if (!cycle.has_forces) {
-          ++c.missing_replay;
-          if (c.first_mismatch.empty())
-            c.first_mismatch = "stamp " + stampDigits(stamp) + ": recorded forces, the replay gave none (" +
-                               cycle.stats.status + ")";
-        } else {
-          const ForceDifference d = compareForces(cycle.forces, *ref->second);
-          if (!d.mismatch.empty()) {
-            ++c.mismatched;
-            if (c.first_mismatch.empty()) c.first_mismatch = "stamp " + stampDigits(stamp) + ": " + d.mismatch;
-          } else {
-            ++c.compared;
-            c.max_abs = std::max(c.max_abs, d.max_abs);
-            c.sum_sq += d.sum_sq;
-            c.values += d.values;
-            if (d.relative > c.max_relative || c.worst_cycle < 0) {
-              c.max_relative = std::max(c.max_relative, d.relative);
-              c.worst_stamp = stamp;
-              c.worst_cycle = index;
-            }
-          }
-        }
-      }
+    const ConstraintForces* replayed = cycle.has_forces ? &cycle.forces : nullptr;
+    const ConstraintForces* recorded =
+        r_.forces_topic.empty() ? nullptr : take(ref_.forces, &ref_.used_forces, stamp);
+    if (!r_.forces_topic.empty()) c.add(replayed, recorded, stamp, index, cycle.stats.status);
+    if (recorded != nullptr && options_.recorded_params) {
+      const auto stats = ref_.stats.find(stamp);
+      r_.answers.add(checkAnswer(cycle.problem, *options_.recorded_params, *recorded),
+                     stats == ref_.stats.end() ? nullptr : stats->second.get(), *options_.recorded_params, stamp);
+    }
+    if (!r_.reference_topic.empty()) {
+      const ConstraintForces* outside = take(ref_.outside, &ref_.used_outside, stamp);
+      if (replayed != nullptr || outside != nullptr)
+        r_.reference_cycles.push_back(r_.reference.add(replayed, outside, stamp, index, cycle.stats.status));
     }
     const auto ref_stats = ref_.stats.find(stamp);
     if (ref_stats != ref_.stats.end()) {
@@ -364,13 +361,22 @@ class Replayer {
     }
   }
 
+  // The forces of `stamp` in `forces` (null when none), marked used.
+  static const ConstraintForces* take(const std::map<ros::Time, ConstraintForces::ConstPtr>& forces,
+                                      std::set<ros::Time>* used, const ros::Time& stamp) {
+    const auto it = forces.find(stamp);
+    if (it == forces.end()) return nullptr;
+    used->insert(stamp);
+    return it->second.get();
+  }
+
   void countUnusedReference() {
-    for (const auto& entry : ref_.forces) {
-      if (ref_.used_forces.count(entry.first) > 0) continue;
-      ++r_.comparison.missing_replay;
-      if (r_.comparison.first_mismatch.empty())
-        r_.comparison.first_mismatch = "stamp " + stampDigits(entry.first) + ": recorded forces, but no such cycle";
-    }
+    for (const auto& entry : ref_.forces)
+      if (ref_.used_forces.count(entry.first) == 0)
+        r_.comparison.add(nullptr, entry.second.get(), entry.first, -1);
+    for (const auto& entry : ref_.outside)
+      if (ref_.used_outside.count(entry.first) == 0)
+        r_.reference_cycles.push_back(r_.reference.add(nullptr, entry.second.get(), entry.first, -1));
   }
 
   bool fail(const std::string& error) {
@@ -397,6 +403,12 @@ ReplayResult replayBag(const ReplayOptions& options, const lcs::SolverParams& pa
   if (const std::string error = lcs::validateParams(params); !error.empty()) {
     result.error = "invalid parameters: " + error;
     return result;
+  }
+  if (options.recorded_params) {
+    if (const std::string error = lcs::validateParams(*options.recorded_params); !error.empty()) {
+      result.error = "invalid recorded parameters: " + error;
+      return result;
+    }
   }
   try {
     Replayer(options, params, &result).run();

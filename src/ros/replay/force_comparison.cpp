@@ -1,5 +1,7 @@
 #include "lcp_contact_solver/ros/replay/force_comparison.h"
 
+#include "lcp_contact_solver/ros/replay/text.h"
+
 #include <algorithm>
 #include <limits>
 
@@ -43,6 +45,41 @@ ForceDifference compareForces(const ConstraintForces& forces, const ConstraintFo
   }
   diff.relative = scale > 0.0 ? diff.max_abs / scale : 0.0;
   return diff;
+}
+
+CycleDifference Comparison::add(const ConstraintForces* replayed, const ConstraintForces* reference,
+                                const ros::Time& stamp, long cycle, const std::string& why_no_replay) {
+  CycleDifference out;
+  out.stamp = stamp;
+  out.cycle = cycle;
+  if (replayed != nullptr) out.contacts = replayed->forces.size();
+  auto not_comparable = [&](std::size_t* counter, const std::string& why) {
+    ++*counter;
+    out.mismatch = why;
+    out.relative = std::numeric_limits<double>::infinity();
+    if (first_mismatch.empty()) first_mismatch = "stamp " + stampDigits(stamp) + ": " + why;
+    return out;
+  };
+  if (replayed == nullptr && reference == nullptr) return out;
+  if (reference == nullptr) return not_comparable(&missing_reference, "no recorded forces");
+  if (replayed == nullptr)
+    return not_comparable(&missing_replay, cycle < 0 ? "recorded forces, but no such cycle"
+                                                     : "recorded forces, the replay gave none" +
+                                                           (why_no_replay.empty() ? "" : " (" + why_no_replay + ")"));
+  const ForceDifference d = compareForces(*replayed, *reference);
+  if (!d.mismatch.empty()) return not_comparable(&mismatched, d.mismatch);
+  ++compared;
+  max_abs = std::max(max_abs, d.max_abs);
+  sum_sq += d.sum_sq;
+  values += d.values;
+  if (d.relative > max_relative || worst_cycle < 0) {
+    max_relative = std::max(max_relative, d.relative);
+    worst_stamp = stamp;
+    worst_cycle = cycle;
+  }
+  out.max_abs = d.max_abs;
+  out.relative = d.relative;
+  return out;
 }
 
 bool Comparison::exceeds(double tolerance) const {

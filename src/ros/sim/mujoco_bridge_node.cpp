@@ -1,5 +1,6 @@
 #include "lcp_contact_solver/ros/sim/mujoco_bridge_node.h"
 
+#include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
 
 #include <diagnostic_msgs/KeyValue.h>
@@ -140,6 +141,24 @@ lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& probl
   return msg;
 }
 
+std::string toReferenceForcesMsg(const scene::MujocoProblem& problem, const lcp_contact_solver::ContactArray& contacts,
+                                 const lcp_contact_solver::Compliance& compliance,
+                                 lcp_contact_solver::ConstraintForces* forces) {
+  lcs::Problem read;
+  std::vector<ContactFrame> frames;
+  if (std::string error = toProblem(contacts, compliance, 0, &read, &frames); !error.empty()) return error;
+  if (read.rowCount() != problem.mujoco_lambda.size())
+    return std::to_string(problem.mujoco_lambda.size()) + " MuJoCo forces for " + std::to_string(read.rowCount()) +
+           " rows";
+  lcs::SolveResult mujoco;
+  mujoco.forces = problem.mujoco_lambda;
+  // Every contact of the bridge carries its own mu (pyramid edges and limits none): the
+  // default is never used.
+  mujoco.states = lcs::classifyContacts(read, lcs::effectiveMu(read, lcs::SolverParams().mu), mujoco.forces);
+  *forces = toConstraintForcesMsg(contacts, frames, read, mujoco);
+  return "";
+}
+
 std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, const scene::MujocoProblem& problem,
                             Eigen::VectorXd* lambda) {
   const std::size_t n = problem.problem.contacts.size();
@@ -181,6 +200,7 @@ MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHan
   if (settings_.storage == "block_sparse") extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;
 
   report_pub_ = pnh_.advertise<diagnostic_msgs::DiagnosticStatus>("step_report", 100);
+  reference_pub_ = pnh_.advertise<lcp_contact_solver::ConstraintForces>("reference_forces", 100);
   next_status_time_ = settings_.status_period;
   if (settings_.steps == 0 && settings_.duration > 0.0)
     settings_.steps = std::max(1, static_cast<int>(std::llround(settings_.duration / dt_)));
@@ -281,6 +301,12 @@ bool MujocoBridgeNode::exchange(const scene::MujocoProblem& mp, const ros::Time&
   header.frame_id = settings_.frame_id;
   auto contacts = boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
   auto compliance = boost::make_shared<lcp_contact_solver::Compliance>(toComplianceMsg(mp, header));
+  if (mujoco_time >= 0.0 && reference_pub_.getNumSubscribers() > 0) {  // MuJoCo's solver ran for this step
+    auto reference = boost::make_shared<lcp_contact_solver::ConstraintForces>();
+    const std::string error = toReferenceForcesMsg(mp, *contacts, *compliance, reference.get());
+    if (error.empty()) reference_pub_.publish(reference);
+    else ROS_ERROR_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": no reference forces: " << error);
+  }
   const SolverLink::Outcome outcome = link_.exchange(stamp, contacts, compliance);
 
   diagnostic_msgs::DiagnosticStatus report;

@@ -20,24 +20,33 @@ namespace {
 
 const char* kUsage =
     "usage: replay IN.bag [--out OUT.bag] [--csv STATS.csv] [--params FILE.yaml | --no-params-file]\n"
-    "              [name=value ...] [--tolerance-compare X] [--contacts-topic T] [--compliance-topic T]\n"
-    "              [--forces-topic T] [--stats-topic T] [--no-inputs] [--no-progress] [--quiet]\n"
+    "              [name=value ...] [--tolerance-compare X] [--reference-topic T] [--per-cycle]\n"
+    "              [--contacts-topic T] [--compliance-topic T] [--forces-topic T] [--stats-topic T]\n"
+    "              [--no-inputs] [--no-progress] [--quiet]\n"
     "\n"
     "Solves every ContactArray/Compliance pair of a recorded bag (no roscore needed) the way\n"
     "contact_solver_node does, in the same order with the same warm start, and compares the\n"
-    "forces with the ones recorded in the bag.\n"
+    "forces with the ones recorded in the bag (a change detector) or with a reference from\n"
+    "outside recorded beside them (--reference-topic: MuJoCo's forces, a correctness check).\n"
+    "With the bag's parameter file, each recorded answer is also checked on its own problem\n"
+    "(residual recomputed from the recorded forces and W, states, signs, friction cone).\n"
     "\n"
     "  --out OUT.bag          write the forces and stats (the node's topic names and stamps), and\n"
-    "                         the input topics unless --no-inputs; OUT.params.yaml beside it\n"
+    "                         the input and reference topics unless --no-inputs; OUT.params.yaml\n"
+    "                         beside it\n"
     "  --csv STATS.csv        per-cycle stats: stamp,contacts,rows,iterations,residual,converged,\n"
     "                         status,solve_time\n"
     "  --params FILE.yaml     node parameters (as config/default.yaml); default: the file beside\n"
     "                         the bag (IN.params.yaml) if there is one, else the node's defaults\n"
     "  name=value             override one parameter: initial_guess or any of the service's\n"
     "                         param_overrides (tolerance, maxIt, mu, solver, ...)\n"
-    "  --tolerance-compare X  exit 1 when the forces differ from the recorded ones by more than\n"
+    "  --tolerance-compare X  exit 1 when the forces differ from the compared ones by more than\n"
     "                         X relative (max |dlambda| / max |lambda| per cycle), or cannot be\n"
-    "                         compared\n"
+    "                         compared, or a recorded answer fails its check; with\n"
+    "                         --reference-topic the reference is compared, else the recording\n"
+    "  --reference-topic T    ConstraintForces from outside to compare with, one per cycle in\n"
+    "                         the node's layout (the MuJoCo bridge's /mujoco_bridge/reference_forces)\n"
+    "  --per-cycle            print the reference comparison of every cycle\n"
     "  --contacts-topic T, --compliance-topic T, --forces-topic T, --stats-topic T\n"
     "                         topics in the bag (default contacts, compliance, constraint_forces,\n"
     "                         contact_solver/stats; else the only topic of the type)\n"
@@ -50,6 +59,7 @@ struct ReplayCommandLine {
   ReplayOptions options;
   std::string params_file;
   bool no_params_file = false, quiet = false, progress = true, have_tolerance = false, help = false;
+  bool per_cycle = false;
   double tolerance = 0.0;
   std::vector<std::string> overrides;
 };
@@ -73,6 +83,8 @@ std::string parseCommandLine(const std::vector<std::string>& args, ReplayCommand
   app.add_option("--compliance-topic", o.compliance_topic);
   app.add_option("--forces-topic", o.forces_topic);
   app.add_option("--stats-topic", o.stats_topic);
+  app.add_option("--reference-topic", o.reference_topic);
+  app.add_flag("--per-cycle", cli->per_cycle);
   CLI::Option* tolerance = app.add_option("--tolerance-compare", tolerance_text);
   bool no_inputs = false, no_progress = false;
   app.add_flag("--no-inputs", no_inputs);
@@ -123,6 +135,7 @@ bool assembleParams(ReplayCommandLine* cli, lcs::SolverParams* params, std::stri
       return false;
     }
     *source = cli->params_file;
+    cli->options.recorded_params = *params;  // the recording's own: its answers are judged by them
   }
   for (const std::string& assignment : cli->overrides) {
     if (const std::string error = applyReplayOverride(assignment, params); !error.empty()) {
@@ -147,24 +160,38 @@ void printReport(const ReplayOptions& options, const ReplayResult& result, std::
   if (!options.csv.empty()) out << "wrote " << options.csv << "\n";
 }
 
-// --tolerance-compare: 0 when the forces match the recording, 1 otherwise.
-int verdict(double tolerance, const Comparison& c, std::ostream& out) {
+// The verdict on one comparison: true when within `tolerance`.
+bool judge(double tolerance, const Comparison& c, const std::string& what, std::ostream& out) {
   if (!c.hasReference()) {
-    out << "FAIL: no recorded forces to compare with (--tolerance-compare " << shortNumber(tolerance) << ")\n";
-    return 1;
+    out << "FAIL: no " << (what == "recording" ? "recorded forces" : what + " forces") << " to compare with (--tolerance-compare "
+        << shortNumber(tolerance) << ")\n";
+    return false;
   }
   if (c.exceeds(tolerance)) {
-    out << "FAIL: forces differ from the recording: max relative " << shortNumber(c.max_relative)
+    out << "FAIL: forces differ from the " << what << ": max relative " << shortNumber(c.max_relative)
         << (c.max_relative > tolerance ? " > " : " <= ") << shortNumber(tolerance);
     if (c.mismatched + c.missing_reference + c.missing_replay > 0)
       out << "; " << (c.mismatched + c.missing_reference + c.missing_replay) << " cycles not comparable ("
           << c.first_mismatch << ")";
     out << "\n";
-    return 1;
+    return false;
   }
-  out << "OK: forces match the recording within " << shortNumber(tolerance) << " relative (max "
+  out << "OK: forces match the " << what << " within " << shortNumber(tolerance) << " relative (max "
       << shortNumber(c.max_relative) << " over " << c.compared << " cycles)\n";
-  return 0;
+  return true;
+}
+
+// --tolerance-compare: 0 when the forces match (the reference when there is one, else the
+// recording) and every recorded answer checked passed, 1 otherwise.
+int verdict(double tolerance, const ReplayResult& result, std::ostream& out) {
+  bool ok = result.reference_topic.empty() ? judge(tolerance, result.comparison, "recording", out)
+                                           : judge(tolerance, result.reference, "reference " + result.reference_topic, out);
+  const AnswerChecks& a = result.answers;
+  if (a.checked > 0 && !a.passed()) {
+    out << "FAIL: " << a.failed << " of " << a.checked << " recorded answers fail their check (" << a.first_failure << ")\n";
+    ok = false;
+  }
+  return ok ? 0 : 1;
 }
 
 }  // namespace
@@ -209,8 +236,11 @@ int runReplayCommand(const std::vector<std::string>& args, std::ostream& out, st
       return 2;
     }
   }
-  if (!cli.quiet) printReport(options, result, out);
-  return cli.have_tolerance ? verdict(cli.tolerance, result.comparison, out) : 0;
+  if (!cli.quiet) {
+    printReport(options, result, out);
+    if (cli.per_cycle) out << formatReferenceCycles(result);
+  }
+  return cli.have_tolerance ? verdict(cli.tolerance, result, out) : 0;
 }
 
 }  // namespace lcp_contact_solver_ros

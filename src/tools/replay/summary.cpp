@@ -26,7 +26,7 @@ std::string formatSummary(const ReplayResult& r) {
   }
   const Comparison& c = r.comparison;
   if (r.forces_topic.empty()) {
-    out << "forces: no recorded forces in the bag, nothing compared\n";
+    if (r.reference_topic.empty()) out << "forces: no recorded forces in the bag, nothing compared\n";
   } else {
     out << "forces vs recorded " << r.forces_topic << ": " << c.compared << " cycles compared";
     if (c.compared > 0) {
@@ -41,12 +41,51 @@ std::string formatSummary(const ReplayResult& r) {
           << " recorded without a replayed counterpart; first: " << c.first_mismatch << "\n";
     }
   }
+  if (!r.reference_topic.empty()) {
+    const Comparison& ref = r.reference;
+    out << "forces vs reference " << r.reference_topic << ": " << ref.compared << " cycles compared";
+    if (ref.compared > 0) {
+      out << "; max |dlambda| " << shortNumber(ref.max_abs) << " N, RMS " << shortNumber(ref.rms())
+          << " N, max relative " << shortNumber(ref.max_relative) << " (worst cycle #" << ref.worst_cycle
+          << ", stamp " << stampDigits(ref.worst_stamp) << ")";
+    }
+    out << "\n";
+    if (ref.mismatched + ref.missing_reference + ref.missing_replay > 0) {
+      out << "reference not comparable: " << ref.mismatched << " cycles with other contacts, " << ref.missing_reference
+          << " replayed without a reference, " << ref.missing_replay << " references without a replayed cycle; first: "
+          << ref.first_mismatch << "\n";
+    }
+  }
+  const AnswerChecks& a = r.answers;
+  if (a.checked > 0) {
+    out << "recorded answers checked on their own problem: " << a.checked << "; recomputed residual max "
+        << shortNumber(a.max_residual) << ", differs from the recorded stats by at most "
+        << shortNumber(a.max_residual_difference) << "; " << a.residual_differs << " residuals differ, "
+        << a.above_tolerance << " converged above the tolerance, " << a.invariant_failures
+        << " with wrong states, negative normal forces or friction outside the cone, " << a.unfit
+        << " that do not fit";
+    if (a.without_stats > 0) out << ", " << a.without_stats << " without recorded stats";
+    if (!a.first_failure.empty()) out << "; first: " << a.first_failure;
+    out << "\n";
+  }
   if (!r.stats_topic.empty()) {
     out << "stats vs recorded " << r.stats_topic << ": " << c.stats_compared << " cycles; iterations differ in "
         << c.iteration_differences;
     if (c.iteration_differences > 0) out << " (first at stamp " << stampDigits(c.first_iteration_difference) << ")";
     out << ", status differs in " << c.status_differences << "; max relative residual difference "
         << shortNumber(c.max_residual_relative) << "\n";
+  }
+  return out.str();
+}
+
+std::string formatReferenceCycles(const ReplayResult& r) {
+  std::ostringstream out;
+  if (r.reference_topic.empty()) return "";
+  out << "cycle stamp contacts max_abs_dlambda_N max_relative (vs " << r.reference_topic << ")\n";
+  for (const CycleDifference& c : r.reference_cycles) {
+    out << c.cycle << " " << stampDigits(c.stamp) << " " << c.contacts << " ";
+    if (c.mismatch.empty()) out << shortNumber(c.max_abs) << " " << shortNumber(c.relative) << "\n";
+    else out << "- - " << c.mismatch << "\n";
   }
   return out.str();
 }

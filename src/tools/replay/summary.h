@@ -11,6 +11,8 @@ namespace lcp_contact_solver_ros {
 
 // The end-of-run report: counts, residual summary, comparison with the recorded forces.
 std::string formatSummary(const ReplayResult& result);
+// One line per cycle of the reference comparison (--per-cycle).
+std::string formatReferenceCycles(const ReplayResult& result);
 
 // A one-line progress bar on a terminal; does nothing when disabled (not a terminal).
 class ProgressBar {

@@ -1,4 +1,7 @@
-// The replay's forces against the ones recorded in the bag: per cycle and over a whole replay.
+// The replay's forces against forces in the bag, per cycle and over a whole replay: the
+// node's own recorded output (a change detector: same code, same inputs give the same
+// forces), or a reference from outside (MuJoCo's efc_force, recorded by the bridge), which
+// checks correctness where the problem has one solution.
 #pragma once
 
 #include <lcp_contact_solver/ConstraintForces.h>
@@ -7,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace lcp_contact_solver_ros {
 
@@ -25,7 +29,18 @@ ForceDifference compareForces(const lcp_contact_solver::ConstraintForces& forces
 // Relative difference of two numbers: |a − b| / max(|a|, |b|), 0 when both are zero.
 double relativeDifference(double a, double b);
 
-// The comparison of a whole replay with the bag's recorded output.
+// One cycle of a comparison (kept per cycle for the reference topic).
+struct CycleDifference {
+  ros::Time stamp;
+  long cycle = -1;            // index in replay order; -1: a reference stamp no cycle had
+  std::size_t contacts = 0;   // the replay's contacts (0 when it gave no forces)
+  // Non-empty: not comparable (counts, ids or rows differ, or forces on one side only).
+  std::string mismatch;
+  double max_abs = 0.0;       // N
+  double relative = 0.0;      // +inf when not comparable
+};
+
+// The comparison of a whole replay with forces in the bag.
 struct Comparison {
   // Forces (cycles whose stamp has forces on both sides).
   std::size_t compared = 0;
@@ -45,6 +60,12 @@ struct Comparison {
   std::size_t status_differences = 0;
   double max_residual_relative = 0.0;  // relativeDifference of the residuals
   ros::Time first_iteration_difference;
+
+  // Adds one cycle: the forces of both sides (either may be null: forces on one side only).
+  // Returns the cycle's figures.
+  CycleDifference add(const lcp_contact_solver::ConstraintForces* replayed,
+                      const lcp_contact_solver::ConstraintForces* reference, const ros::Time& stamp, long cycle,
+                      const std::string& why_no_replay = "");
 
   double rms() const { return values > 0 ? std::sqrt(sum_sq / static_cast<double>(values)) : 0.0; }
   // Something to compare with was found in the bag.

@@ -11,6 +11,13 @@
 //                then MuJoCo's semi-implicit Euler (mj_Euler). With ~compare its solver
 //                also runs, only to report the difference.
 //
+// Whenever MuJoCo's solver ran for the step (cross_check, drive with ~compare) and someone
+// listens, `~reference_forces` carries MuJoCo's own forces of that step (efc_force) as a
+// ConstraintForces message with the step's stamp, in the node's layout for the same
+// ContactArray (ids, rows, frames): a bag of contacts, compliance and reference_forces lets
+// `replay --reference-topic /mujoco_bridge/reference_forces` compare our solve with MuJoCo's
+// (scripts/record-mujoco-bags).
+//
 // Every step with rows publishes a `~step_report` (diagnostic_msgs/DiagnosticStatus, values
 // by key: step, time, contacts, rows, our residual, MuJoCo's and our solve time, max
 // abs/rel difference per contact state, penetration, energy); ~print_summary prints status
@@ -77,6 +84,15 @@ lcp_contact_solver::ContactArray toContactArrayMsg(const lcs::scene::MujocoProbl
                                                    const std_msgs::Header& header);
 lcp_contact_solver::Compliance toComplianceMsg(const lcs::scene::MujocoProblem& problem,
                                                const std_msgs::Header& header);
+// MuJoCo's own forces of the step (problem.mujoco_lambda: efc_force in problem rows) as the
+// node would publish them for `contacts` and `compliance` (toProblem, then
+// toConstraintForcesMsg with the states classifyContacts gives): same ids, rows and layout,
+// so they compare with the node's row by row. Empty string, or why the messages do not
+// convert (they came from `problem`, so only for a bug).
+std::string toReferenceForcesMsg(const lcs::scene::MujocoProblem& problem,
+                                 const lcp_contact_solver::ContactArray& contacts,
+                                 const lcp_contact_solver::Compliance& compliance,
+                                 lcp_contact_solver::ConstraintForces* forces);
 // λ (problem rows) from the solver's forces for this problem; empty string or why they do not fit.
 std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces,
                             const lcs::scene::MujocoProblem& problem, Eigen::VectorXd* lambda);
@@ -159,6 +175,7 @@ class MujocoBridgeNode {
 
   SolverLink link_;
   ros::Publisher report_pub_;
+  ros::Publisher reference_pub_;  // ~reference_forces
 
   MujocoBridgeCounters counters_;
   MujocoBridgeTotals totals_;
