@@ -136,19 +136,25 @@ double errorSum(const Problem& problem, const std::vector<double>& mu, const dou
 double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
                           const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
                           const std::vector<bool>& ignored) {
-  // stableNorm: |d_free| of 1e300 must not overflow to inf (the residual would read 0).
-  const double q_norm = problem.d_free.stableNorm();
-  const double scale = q_norm > 0.0 && std::isfinite(q_norm) ? q_norm : 1.0;
-  double residual = std::sqrt(errorSum(problem, mu, lambda.data(), d.data(), ignored)) / scale;
-  if (!std::isfinite(residual) && scale > 1.0) {
-    // Every contact's error is positively homogeneous in (λ, d) (cones, min-maps, bilateral
-    // rows), so measured on (λ, d) / |d_free| it is the same ratio without squaring values
-    // of 1e284 (found by fuzzing: an exact answer to a 1e300 problem read as DBL_MAX).
-    const Eigen::VectorXd lambda_scaled = lambda / scale, d_scaled = d / scale;
-    residual = std::sqrt(errorSum(problem, mu, lambda_scaled.data(), d_scaled.data(), ignored));
+  const double q_norm = problem.d_free.norm();
+  if (std::isfinite(q_norm)) {
+    const double residual = std::sqrt(errorSum(problem, mu, lambda.data(), d.data(), ignored)) /
+                            (q_norm > 0.0 ? q_norm : 1.0);
+    if (std::isfinite(residual)) return residual;
   }
-  // An overflowed sum must still read as "far from converged", never NaN.
-  return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
+  // Overflow, in |d_free| (entries near DBL_MAX) or in the squares of the errors (1e284):
+  // every contact's error is positively homogeneous in (λ, d) (cones, min-maps, bilateral
+  // rows), so the same ratio is measured on λ, d and d_free divided by m = max |d_free_i|
+  // (found by fuzzing: exact answers read as DBL_MAX, or as 0 when |d_free| was inf).
+  const double m = problem.d_free.size() > 0 ? problem.d_free.cwiseAbs().maxCoeff() : 0.0;
+  if (m > 0.0 && std::isfinite(m)) {
+    const Eigen::VectorXd lambda_scaled = lambda / m, d_scaled = d / m;
+    const double residual = std::sqrt(errorSum(problem, mu, lambda_scaled.data(), d_scaled.data(), ignored)) /
+                            (problem.d_free / m).norm();
+    if (std::isfinite(residual)) return residual;
+  }
+  // Still overflowing: "far from converged", never NaN.
+  return std::numeric_limits<double>::max();
 }
 
 std::vector<ContactState> classifyContacts(const Problem& problem, const std::vector<double>& mu,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace lcp_contact_solver {
 namespace {
@@ -253,6 +254,25 @@ TEST(Analytic, ResidualOfAHugeProblemIsScaledNotOverflowed) {
     EXPECT_LE(r.residual, 1e-10) << solverName(kind);
     EXPECT_NEAR(r.forces[1], 5e299, 1e285) << solverName(kind);
   }
+}
+
+TEST(Analytic, ResidualWithFreeMotionsNearDblMaxIsMeasuredToScale) {
+  // |d_free| itself overflows (entries of DBL_MAX): the ratio is measured on everything
+  // divided by max |d_free_i|, the same number without inf (fuzzing found a penetration of
+  // 1 mm read against a norm of 1, while the μ = 0 compaction measured it against DBL_MAX).
+  constexpr double kMax = std::numeric_limits<double>::max();
+  Problem p;
+  p.contacts.push_back(Contact{1, ContactType::kFrictional, 3, 0.5});
+  p.contacts.push_back(Contact{2, ContactType::kFrictional, 3, 0.5});
+  p.W = Eigen::MatrixXd(Eigen::MatrixXd::Identity(6, 6));
+  const std::vector<double> mu(2, 0.5);
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(6);
+  p.d_free.resize(6);
+  p.d_free << -0.001, 0.0, 0.0, kMax, kMax, kMax;
+  EXPECT_LT(naturalMapResidual(p, mu, none, p.d_free, {}), 1e-300);
+  // A penetration of DBL_MAX with no force: error DBL_MAX against |d_free| = 2 DBL_MAX.
+  p.d_free << -kMax, 0.0, 0.0, kMax, kMax, kMax;
+  EXPECT_NEAR(naturalMapResidual(p, mu, none, p.d_free, {}), 0.5, 1e-12);
 }
 
 }  // namespace
