@@ -205,6 +205,9 @@ struct Tracker {
   long completed = 0, failed = 0;
   std::vector<double> lat_forces, lat_stats, solve_time, iterations;
   std::vector<double> overhead;  // forces latency - the node's solve_time, same stamp
+  // Inside the solver: SolverStats.latency (pair complete, i.e. both messages received and
+  // deserialized, to forces published) minus its solve_time.
+  std::vector<double> node_overhead;
   std::map<std::string, long> statuses;
 
   void reset() {
@@ -217,6 +220,7 @@ struct Tracker {
     solve_time.clear();
     iterations.clear();
     overhead.clear();
+    node_overhead.clear();
     statuses.clear();
   }
   void onForces(const lcs::ConstraintForces::ConstPtr& f) {
@@ -239,10 +243,13 @@ struct Tracker {
     if (it == pending.end() || it->second.stats) return;
     it->second.stats = true;
     lat_stats.push_back(std::chrono::duration<double>(now - it->second.sent).count());
-    solve_time.push_back(s->solve_time);
-    iterations.push_back(s->iterations);
+    if (s->success) {  // a dropped or unpaired array has no solve (solve_time 0)
+      solve_time.push_back(s->solve_time);
+      iterations.push_back(s->iterations);
+    }
     ++statuses[s->status];
     if (std::isfinite(it->second.lat_forces)) overhead.push_back(it->second.lat_forces - s->solve_time);
+    if (s->success) node_overhead.push_back(s->latency - s->solve_time);
     if (!s->success && !it->second.forces) {  // no forces will come
       it->second.forces = true;
       --in_flight;
@@ -501,14 +508,16 @@ int main(int argc, char** argv) {
            "lat_median_ms,lat_p90_ms,lat_p99_ms,lat_mean_ms,stats_lat_median_ms,node_solve_median_ms,overhead_median_ms,"
            "overhead_p90_ms,"
            "node_iterations_median,inproc_solve_ms,inproc_iterations,inproc_cycle_ms,msg_in_bytes,msg_out_bytes,"
-           "serialize_in_ms,serialize_out_ms,markers_build_ms,marker_bytes,node_cpu_percent,load1\n";
+           "serialize_in_ms,serialize_out_ms,markers_build_ms,marker_bytes,node_cpu_percent,load1,"
+           "node_internal_overhead_median_ms,node_internal_overhead_p90_ms,sent,skipped,node_cpu_ms_per_answer\n";
 
   std::printf("latency: %s, markers subscriber %d, warm start %s; solver %s, tolerance %g, maxIt %d; load %s\n",
               o.label.c_str(), o.markers, warm ? "on" : "off", lcs::solverName(params.solver), params.tolerance,
               params.maxIt, lcs_bench::loadAverageText().c_str());
   std::printf("| problem | contacts | phase | received | rate (Hz) | latency median / p90 / p99 (ms) | node solve_time "
-              "(ms) | latency − solve_time (ms) | in-process solve / cycle (ms) | node CPU |\n"
-              "|---|---:|---|---:|---:|---|---:|---:|---|---:|\n");
+              "(ms) | latency − solve_time (ms) | in the node: latency − solve_time (ms) | in-process solve / cycle (ms) | "
+              "node CPU | node CPU per answer (ms) |\n"
+              "|---|---:|---|---:|---:|---|---:|---:|---:|---|---:|---:|\n");
   std::fflush(stdout);
 
   for (Case& p : problems) {
@@ -591,13 +600,16 @@ int main(int argc, char** argv) {
           << 1e3 * percentile(tracker.overhead, 0.5) << ',' << 1e3 * percentile(tracker.overhead, 0.9) << ','
           << percentile(tracker.iterations, 0.5) << ',' << 1e3 * t_solve << ',' << last.iterations << ','
           << 1e3 * t_cycle << ',' << bytes_in << ',' << bytes_out << ',' << 1e3 * t_ser_in << ',' << 1e3 * t_ser_out
-          << ',' << 1e3 * t_markers << ',' << marker_bytes << ',' << cpu << ',' << lcs_bench::loadAverage1() << '\n';
+          << ',' << 1e3 * t_markers << ',' << marker_bytes << ',' << cpu << ',' << lcs_bench::loadAverage1() << ','
+          << 1e3 * percentile(tracker.node_overhead, 0.5) << ',' << 1e3 * percentile(tracker.node_overhead, 0.9) << ','
+          << sent << ',' << skipped << ',' << 1e3 * (cpu1 - cpu0) / std::max<long>(tracker.completed, 1) << '\n';
       csv.flush();
-      std::printf("| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% |\n",
+      std::printf("| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% | %.3f |\n",
                   p.name.c_str(), p.problem.contacts.size(), name.c_str(), tracker.completed, rate,
                   1e3 * percentile(lf, 0.5), 1e3 * percentile(lf, 0.9), 1e3 * percentile(lf, 0.99),
-                  1e3 * percentile(tracker.solve_time, 0.5), 1e3 * percentile(tracker.overhead, 0.5), 1e3 * t_solve,
-                  1e3 * t_cycle, cpu);
+                  1e3 * percentile(tracker.solve_time, 0.5), 1e3 * percentile(tracker.overhead, 0.5),
+                  1e3 * percentile(tracker.node_overhead, 0.5), 1e3 * t_solve, 1e3 * t_cycle, cpu,
+                  1e3 * (cpu1 - cpu0) / std::max<long>(tracker.completed, 1));
       if (pace_hz > 0.0)
         std::printf("  (%s: %ld sent on a %.0f Hz clock, %ld skipped with %d in flight, %ld answered)\n", name.c_str(), sent,
                     pace_hz, skipped, inflight, tracker.completed);
