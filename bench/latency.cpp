@@ -59,6 +59,7 @@
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace lcs = lcp_contact_solver;
@@ -76,6 +77,8 @@ struct Options {
   double rate_seconds = 10.0;
   double latency_seconds = 30.0;
   std::vector<int> inflight = {1, 4};
+  std::vector<int> paces;        // Hz: phases publishing on a fixed clock (paced_<Hz>)
+  double pace_seconds = 10.0;
   std::string label = "node";
   int solver_pid = 0;
   bool in_process_nodelet = false;
@@ -90,7 +93,8 @@ int usage(int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: latency_bench [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] [--rate-seconds S]\n"
                "               [--latency-seconds S]\n"
-               "               [--inflight 1,4] [--label NAME] [--solver-pid PID] [--in-process-nodelet]\n"
+               "               [--inflight 1,4] [--pace HZ,...] [--pace-seconds S]\n"
+               "               [--label NAME] [--solver-pid PID] [--in-process-nodelet]\n"
                "               [--markers 0|1] [--out FILE.csv]\n"
                "       latency_bench --sink TOPIC [--duration S]\n"
                "       latency_bench --reference-only [--bases 5,16] [--out FILE.csv]\n");
@@ -201,6 +205,9 @@ struct Tracker {
   long completed = 0, failed = 0;
   std::vector<double> lat_forces, lat_stats, solve_time, iterations;
   std::vector<double> overhead;  // forces latency - the node's solve_time, same stamp
+  // Inside the solver: SolverStats.latency (pair complete, i.e. both messages received and
+  // deserialized, to forces published) minus its solve_time.
+  std::vector<double> node_overhead;
   std::map<std::string, long> statuses;
 
   void reset() {
@@ -213,6 +220,7 @@ struct Tracker {
     solve_time.clear();
     iterations.clear();
     overhead.clear();
+    node_overhead.clear();
     statuses.clear();
   }
   void onForces(const lcs::ConstraintForces::ConstPtr& f) {
@@ -235,10 +243,13 @@ struct Tracker {
     if (it == pending.end() || it->second.stats) return;
     it->second.stats = true;
     lat_stats.push_back(std::chrono::duration<double>(now - it->second.sent).count());
-    solve_time.push_back(s->solve_time);
-    iterations.push_back(s->iterations);
+    if (s->success) {  // a dropped or unpaired array has no solve (solve_time 0)
+      solve_time.push_back(s->solve_time);
+      iterations.push_back(s->iterations);
+    }
     ++statuses[s->status];
     if (std::isfinite(it->second.lat_forces)) overhead.push_back(it->second.lat_forces - s->solve_time);
+    if (s->success) node_overhead.push_back(s->latency - s->solve_time);
     if (!s->success && !it->second.forces) {  // no forces will come
       it->second.forces = true;
       --in_flight;
@@ -427,6 +438,8 @@ int main(int argc, char** argv) {
     else if (a == "--rate-seconds") o.rate_seconds = std::stod(v);
     else if (a == "--latency-seconds") o.latency_seconds = std::stod(v);
     else if (a == "--inflight") o.inflight = lcs_bench::parseIntList(v);
+    else if (a == "--pace") o.paces = lcs_bench::parseIntList(v);
+    else if (a == "--pace-seconds") o.pace_seconds = std::stod(v);
     else if (a == "--label") o.label = v;
     else if (a == "--solver-pid") o.solver_pid = std::stoi(v);
     else if (a == "--markers") o.markers = std::stoi(v);
@@ -495,14 +508,16 @@ int main(int argc, char** argv) {
            "lat_median_ms,lat_p90_ms,lat_p99_ms,lat_mean_ms,stats_lat_median_ms,node_solve_median_ms,overhead_median_ms,"
            "overhead_p90_ms,"
            "node_iterations_median,inproc_solve_ms,inproc_iterations,inproc_cycle_ms,msg_in_bytes,msg_out_bytes,"
-           "serialize_in_ms,serialize_out_ms,markers_build_ms,marker_bytes,node_cpu_percent,load1\n";
+           "serialize_in_ms,serialize_out_ms,markers_build_ms,marker_bytes,node_cpu_percent,load1,"
+           "node_internal_overhead_median_ms,node_internal_overhead_p90_ms,sent,skipped,node_cpu_ms_per_answer\n";
 
   std::printf("latency: %s, markers subscriber %d, warm start %s; solver %s, tolerance %g, maxIt %d; load %s\n",
               o.label.c_str(), o.markers, warm ? "on" : "off", lcs::solverName(params.solver), params.tolerance,
               params.maxIt, lcs_bench::loadAverageText().c_str());
   std::printf("| problem | contacts | phase | received | rate (Hz) | latency median / p90 / p99 (ms) | node solve_time "
-              "(ms) | latency − solve_time (ms) | in-process solve / cycle (ms) | node CPU |\n"
-              "|---|---:|---|---:|---:|---|---:|---:|---|---:|\n");
+              "(ms) | latency − solve_time (ms) | in the node: latency − solve_time (ms) | in-process solve / cycle (ms) | "
+              "node CPU | node CPU per answer (ms) |\n"
+              "|---|---:|---|---:|---:|---|---:|---:|---:|---|---:|---:|\n");
   std::fflush(stdout);
 
   for (Case& p : problems) {
@@ -529,17 +544,34 @@ int main(int argc, char** argv) {
         [&] { markers = lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display); });
     const std::uint32_t marker_bytes = wireBytes(markers);
 
-    auto phase = [&](const std::string& name, int inflight, int count, double seconds) {
+    // pace_hz > 0: a pair every 1/pace_hz s on a fixed clock whatever is in flight (a
+    // simulator stepping at that rate); `inflight` only bounds the backlog (then the phase
+    // is behind: the pair is not sent and counted as skipped).
+    auto phase = [&](const std::string& name, int inflight, int count, double seconds, double pace_hz = 0.0) {
       tracker.reset();
       const double cpu0 = o.solver_pid > 0 ? cpuSeconds(o.solver_pid) : std::nan("");
       const auto t0 = Clock::now();
-      long sent = 0, lost = 0;
+      long sent = 0, lost = 0, skipped = 0, ticks = 0;
       std::unique_lock<std::mutex> lock(tracker.m);
       for (;;) {
         const double elapsed = secondsSince(t0);
         if (count > 0 ? (sent >= count || (elapsed >= o.latency_seconds && sent >= 10)) : elapsed >= seconds) break;
         if (!ros::ok()) break;
-        if (tracker.in_flight >= inflight) {
+        if (pace_hz > 0.0) {
+          const auto next = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(ticks / pace_hz));
+          if (Clock::now() < next) {
+            lock.unlock();
+            std::this_thread::sleep_until(next);
+            lock.lock();
+            continue;
+          }
+          ++ticks;
+          lost += tracker.expire(5.0);
+          if (tracker.in_flight >= inflight) {
+            ++skipped;
+            continue;
+          }
+        } else if (tracker.in_flight >= inflight) {
           tracker.cv.wait_for(lock, std::chrono::milliseconds(50));
           lost += tracker.expire(5.0);
           continue;
@@ -568,13 +600,19 @@ int main(int argc, char** argv) {
           << 1e3 * percentile(tracker.overhead, 0.5) << ',' << 1e3 * percentile(tracker.overhead, 0.9) << ','
           << percentile(tracker.iterations, 0.5) << ',' << 1e3 * t_solve << ',' << last.iterations << ','
           << 1e3 * t_cycle << ',' << bytes_in << ',' << bytes_out << ',' << 1e3 * t_ser_in << ',' << 1e3 * t_ser_out
-          << ',' << 1e3 * t_markers << ',' << marker_bytes << ',' << cpu << ',' << lcs_bench::loadAverage1() << '\n';
+          << ',' << 1e3 * t_markers << ',' << marker_bytes << ',' << cpu << ',' << lcs_bench::loadAverage1() << ','
+          << 1e3 * percentile(tracker.node_overhead, 0.5) << ',' << 1e3 * percentile(tracker.node_overhead, 0.9) << ','
+          << sent << ',' << skipped << ',' << 1e3 * (cpu1 - cpu0) / std::max<long>(tracker.completed, 1) << '\n';
       csv.flush();
-      std::printf("| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% |\n",
+      std::printf("| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% | %.3f |\n",
                   p.name.c_str(), p.problem.contacts.size(), name.c_str(), tracker.completed, rate,
                   1e3 * percentile(lf, 0.5), 1e3 * percentile(lf, 0.9), 1e3 * percentile(lf, 0.99),
-                  1e3 * percentile(tracker.solve_time, 0.5), 1e3 * percentile(tracker.overhead, 0.5), 1e3 * t_solve,
-                  1e3 * t_cycle, cpu);
+                  1e3 * percentile(tracker.solve_time, 0.5), 1e3 * percentile(tracker.overhead, 0.5),
+                  1e3 * percentile(tracker.node_overhead, 0.5), 1e3 * t_solve, 1e3 * t_cycle, cpu,
+                  1e3 * (cpu1 - cpu0) / std::max<long>(tracker.completed, 1));
+      if (pace_hz > 0.0)
+        std::printf("  (%s: %ld sent on a %.0f Hz clock, %ld skipped with %d in flight, %ld answered)\n", name.c_str(), sent,
+                    pace_hz, skipped, inflight, tracker.completed);
       if (tracker.failed > 0 || lost > 0) {
         std::printf("  (%ld failed, %ld lost;", tracker.failed, lost);
         for (const auto& [s, n] : tracker.statuses) std::printf(" %s %ld", s.c_str(), n);
@@ -585,6 +623,7 @@ int main(int argc, char** argv) {
     phase("warmup", 1, o.warmup, 0.0);
     phase("latency", 1, o.count, 0.0);
     for (int n : o.inflight) phase("rate_" + std::to_string(n), n, 0, o.rate_seconds);
+    for (int hz : o.paces) phase("paced_" + std::to_string(hz), 1000, 0, o.pace_seconds, hz);
     std::printf("  %s: in-process solve %.3f ms (%d it, %s), cycle %.3f ms, serialize+deserialize in %.3f ms (%u B) / "
                 "out %.3f ms (%u B), markers build %.3f ms (%u B)\n",
                 p.name.c_str(), 1e3 * t_solve, last.iterations, last.solver.c_str(), 1e3 * t_cycle, 1e3 * t_ser_in,

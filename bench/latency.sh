@@ -8,6 +8,7 @@
 #   bench/latency.sh [--build DIR] [--csv OUT.csv] [--modes reference,node,nodelet,inproc]
 #                    [--starts cold,warm] [--markers 0,1] [--bases 5,16] [--count N]
 #                    [--rate-seconds S] [--latency-seconds S] [--inflight 1,4] [--param NAME=VALUE]...
+#                    [--pace HZ,...] [--pace-seconds S] [--pin CPUS]
 #
 # Modes: reference  no solver process: the node's cycle in-process, part by part, on the same
 #                messages (latency_bench --reference-only; CSV <csv>_reference.csv)
@@ -20,6 +21,9 @@
 #         warm  initial_guess=true (the default): the same problem again with the same contact
 #               ids, so after the first cycle the warm start is already the answer
 # Markers: 1 runs a second process subscribed to /contact_solver/markers (node mode only).
+# --pace 1000: after the rate phases, a phase publishing a pair every 1 ms on a fixed clock
+#         (paced_1000, --pace-seconds long): the rate a simulator at 1 kHz gets answered.
+# --pin CPUS: the solver process (node, nodelet manager) runs under `taskset -c CPUS`.
 # Defaults: build folder ./build/bench-runtime, all four modes and both starts, markers 0 and 1 (node),
 # CSV bench/results/latency.csv (replaced), the tables in the .log beside it (`--modes
 # reference` alone writes latency_reference.{csv,log} and leaves latency.{csv,log} alone). A private
@@ -35,6 +39,7 @@ starts="cold,warm"
 markers_list="0,1"
 bench_args=()
 params=()
+pin=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -42,14 +47,18 @@ while [ $# -gt 0 ]; do
     --modes) modes="$2"; shift 2 ;;
     --starts) starts="$2"; shift 2 ;;
     --markers) markers_list="$2"; shift 2 ;;
-    --bases | --balls | --count | --rate-seconds | --latency-seconds | --inflight | --steps | --warmup) bench_args+=("$1" "$2"); shift 2 ;;
+    --bases | --balls | --count | --rate-seconds | --latency-seconds | --inflight | --steps | --warmup | --pace | --pace-seconds) bench_args+=("$1" "$2"); shift 2 ;;
+    --pin) pin=(taskset -c "$2"); shift 2 ;;
     --param) params+=("$2"); shift 2 ;;
-    -h | --help) sed -n '2,26p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,30p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "latency.sh: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
 done
 log="${csv%.csv}.log"
 [ "$modes" = reference ] && log="${csv%.csv}_reference.log"  # a reference-only run keeps the other files
+# The devel space: the build folder's own (build/bench-runtime), else ./devel (the main build).
+devel="${DEVEL_DIR:-$build/devel}"
+[ -f "$devel/setup.bash" ] || devel="$here/devel"
 bin="$devel/lib/lcp_contact_solver"
 for exe in contact_solver_node latency_bench; do
   if [ ! -x "$bin/$exe" ]; then
@@ -121,11 +130,11 @@ for mode in "${mode_arr[@]}"; do
       extra=()
       case "$mode" in
         node)
-          setsid "$bin/contact_solver_node" __name:=contact_solver >"$ROS_LOG_DIR/latency_node.out" 2>&1 </dev/null &
+          setsid "${pin[@]}" "$bin/contact_solver_node" __name:=contact_solver >"$ROS_LOG_DIR/latency_node.out" 2>&1 </dev/null &
           solver_pid=$!
           extra=(--solver-pid "$solver_pid") ;;
         nodelet)
-          setsid "$nodelet_exe" manager __name:=lcs_manager >"$ROS_LOG_DIR/latency_manager.out" 2>&1 </dev/null &
+          setsid "${pin[@]}" "$nodelet_exe" manager __name:=lcs_manager >"$ROS_LOG_DIR/latency_manager.out" 2>&1 </dev/null &
           solver_pid=$!
           setsid "$nodelet_exe" load lcp_contact_solver/ContactSolverNodelet lcs_manager __name:=contact_solver \
             >"$ROS_LOG_DIR/latency_loader.out" 2>&1 </dev/null &

@@ -1,6 +1,8 @@
 // Message -> Problem (lcp_contact_solver_ros::toProblem, the node's conversion) at 100 and
 // 1000 frictional contacts, block-sparse W (each contact coupled to its 8 neighbours, 3x3
-// blocks): best of 5 rounds of 20 conversions (issue #15, "the node without copies").
+// blocks): best of 5 rounds of 20 conversions (issue #15, "the node without copies"), with
+// validateProblem and without it (validate=false: what CycleSolver calls, the core's solve
+// runs the same check).
 //   to_problem_bench
 #include "lcp_contact_solver/ros/msg_conversion.h"
 #include <chrono>
@@ -29,17 +31,20 @@ int main() {
         w.block_cols.push_back(j);
         for (int k = 0; k < 9; ++k) w.block_data.push_back(i == j ? (k % 4 == 0 ? 1.0 : 0.0) : 0.01);
       }
-    double best = 1e9;
-    for (int round = 0; round < 5; ++round) {
-      auto t0 = std::chrono::steady_clock::now();
-      for (int k = 0; k < 20; ++k) {
-        lcs::Problem p;
-        std::vector<lcp_contact_solver_ros::ContactFrame> frames;
-        const std::string err = lcp_contact_solver_ros::toProblem(a, w, 0, &p, &frames);
-        if (!err.empty()) { std::printf("error: %s\n", err.c_str()); return 1; }
+    for (bool validate : {true, false}) {
+      double best = 1e9;
+      for (int round = 0; round < 5; ++round) {
+        auto t0 = std::chrono::steady_clock::now();
+        for (int k = 0; k < 20; ++k) {
+          lcs::Problem p;
+          std::vector<lcp_contact_solver_ros::ContactFrame> frames;
+          const std::string err = lcp_contact_solver_ros::toProblem(a, w, 0, &p, &frames, validate);
+          if (!err.empty()) { std::printf("error: %s\n", err.c_str()); return 1; }
+        }
+        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / 20);
       }
-      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / 20);
+      std::printf("%d contacts: toProblem %.1f us (%s)\n", n, 1e6 * best,
+                  validate ? "with validateProblem" : "validate=false, as CycleSolver");
     }
-    std::printf("%d contacts: toProblem %.1f us\n", n, 1e6 * best);
   }
 }

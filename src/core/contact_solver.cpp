@@ -214,8 +214,15 @@ Coupling normalCoupling(const SolveContext& ctx) {
   std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0);
   std::vector<bool> redundant(nc, false);
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  for (int i = 0; i < nc; ++i)
-    diag[i] = dense ? (*dense)(ctx.offsets[i], ctx.offsets[i]) : diagonalBlock(p.W, ctx.offsets[i], 1)(0, 0);
+  if (dense) {
+    for (int i = 0; i < nc; ++i) diag[i] = (*dense)(ctx.offsets[i], ctx.offsets[i]);
+  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
+    // W_nn of each contact from its stored diagonal block (a one-row window through
+    // diagonalBlock scanned every block row: quadratic in the contacts).
+    for (int i = 0; i < sparse->blockCount() && i < nc; ++i)
+      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
+        if (sparse->block_col[b] == i) diag[i] += sparse->values[sparse->value_start[b]];
+  }
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j])) redundant[i] = true;
@@ -572,25 +579,52 @@ Compaction compactZeroFriction(const Problem& p, double default_mu) {
 
 }  // namespace
 
-SolveResult ContactSolver::solve(const Problem& input) {
-  const Clock::time_point start = Clock::now();
+SolveResult ContactSolver::invalidInput(const std::string& error) const {
   SolveResult result;
   result.solver = solverName(params_.solver);
+  result.status = SolveStatus::kInvalidInput;
+  result.message = error;
+  return result;
+}
+
+SolveResult ContactSolver::solve(const Problem& input) {
+  const Clock::time_point start = Clock::now();
   std::string err = validateParams(params_);
   if (err.empty()) err = validateProblem(input, params_.max_rows);
-  // Baumgarte and softness change d_free and W: solve a copy, only when they are used.
-  Problem stabilized;
-  const bool stabilize = err.empty() && needsStabilization(input, params_);
-  if (stabilize) {
-    stabilized = input;
+  if (!err.empty()) return invalidInput(err);
+  if (!needsStabilization(input, params_)) return solveStated(input, start);
+  // Baumgarte and softness change d_free and W: solve a copy (solveInPlace does without).
+  Problem stabilized = input;
+  err = applyStabilization(params_, &stabilized);
+  if (!err.empty()) return invalidInput(err);
+  return solveStated(stabilized, start);
+}
+
+SolveResult ContactSolver::solveInPlace(Problem& problem) {
+  const Clock::time_point start = Clock::now();
+  std::string err = validateParams(params_);
+  if (err.empty()) err = validateProblem(problem, params_.max_rows);
+  if (!err.empty()) return invalidInput(err);
+  if (!needsStabilization(problem, params_)) return solveStated(problem, start);
+  StabilizationUndo undo;
+  if (!applyStabilizationInPlace(params_, &problem, &undo, &err)) {  // rare: W needs a block added
+    Problem stabilized = problem;
     err = applyStabilization(params_, &stabilized);
+    if (!err.empty()) return invalidInput(err);
+    return solveStated(stabilized, start);
   }
-  if (!err.empty()) {
-    result.status = SolveStatus::kInvalidInput;
-    result.message = err;
-    return result;
-  }
-  const Problem& stated = stabilize ? stabilized : input;
+  if (!err.empty()) return invalidInput(err);
+  struct Restore {  // also when the solve throws (bad_alloc)
+    const StabilizationUndo& undo;
+    Problem& problem;
+    ~Restore() { undo.restore(&problem); }
+  } restore{undo, problem};
+  return solveStated(problem, start);
+}
+
+SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::steady_clock::time_point start) {
+  SolveResult result;
+  result.solver = solverName(params_.solver);
   // build_lcp with the body form: Gauss-Seidel runs unbuilt on it (false); every other case
   // assembles the block-sparse W once and solves as usual.
   const bool unbuilt = stated.bodies && !params_.build_lcp && runsUnbuilt(params_.solver);

@@ -99,4 +99,74 @@ std::string applyStabilization(const SolverParams& params, Problem* problem) {
   return "";
 }
 
+bool applyStabilizationInPlace(const SolverParams& params, Problem* problem, StabilizationUndo* undo,
+                               std::string* error) {
+  error->clear();
+  const bool velocity = params.constraint_level == ConstraintLevel::kVelocity;
+  const std::vector<int> offsets = problem->rowOffsets();
+  const std::size_t nc = problem->contacts.size();
+  std::vector<double> shift(nc, 0.0), softness(nc, 0.0);
+  std::vector<bool> shifted(nc, false);
+  bool soft = false;
+  for (std::size_t i = 0; i < nc; ++i) {  // first every check, so an error changes nothing
+    const Contact& c = problem->contacts[i];
+    const double beta = effectiveErp(c, params);
+    if (c.gap < 0.0 && beta > 0.0) {
+      if (velocity && params.time_step <= 0.0) {
+        *error = "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) + ")";
+        return true;
+      }
+      shift[i] = velocity ? beta * c.gap / params.time_step : beta * c.gap;
+      shifted[i] = true;
+    }
+    softness[i] = effectiveSoftness(c, params);
+    soft = soft || softness[i] > 0.0;
+  }
+  // Where each softness goes: W's (normal, normal) entry of the contact.
+  std::vector<double*> diagonal;
+  if (soft && !problem->bodies) {
+    diagonal.assign(nc, nullptr);
+    if (auto* dense = std::get_if<Eigen::MatrixXd>(&problem->W)) {
+      for (std::size_t i = 0; i < nc; ++i)
+        if (softness[i] != 0.0) diagonal[i] = &(*dense)(offsets[i], offsets[i]);
+    } else {
+      auto& sparse = std::get<BlockSparseMatrix>(problem->W);
+      for (std::size_t i = 0; i < nc; ++i) {
+        if (softness[i] == 0.0) continue;
+        const int row = static_cast<int>(i);
+        for (int b = sparse.row_start[row]; b < sparse.row_start[row + 1]; ++b)
+          if (sparse.block_col[b] == row) diagonal[i] = &sparse.values[sparse.value_start[b]];
+        if (!diagonal[i]) return false;  // no stored self-compliance: the copying path adds the block
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nc; ++i) {
+    if (!shifted[i]) continue;
+    double& d = problem->d_free[offsets[i]];
+    undo->d_free.emplace_back(offsets[i], d);
+    d += shift[i];
+  }
+  if (soft && problem->bodies) {  // the body form's own diagonal: a copy of the (per-body) form
+    auto bodies = std::make_shared<BodyCompliance>(*problem->bodies);
+    if (bodies->diagonal.size() == 0) bodies->diagonal = Eigen::VectorXd::Zero(offsets.back());
+    for (std::size_t i = 0; i < nc; ++i) bodies->diagonal[offsets[i]] += softness[i];
+    undo->bodies = problem->bodies;
+    undo->bodies_changed = true;
+    problem->bodies = std::move(bodies);
+  } else if (soft) {
+    for (std::size_t i = 0; i < nc; ++i) {
+      if (!diagonal[i]) continue;
+      undo->w.emplace_back(diagonal[i], *diagonal[i]);
+      *diagonal[i] += softness[i];
+    }
+  }
+  return true;
+}
+
+void StabilizationUndo::restore(Problem* problem) const {
+  for (auto it = w.rbegin(); it != w.rend(); ++it) *it->first = it->second;
+  for (auto it = d_free.rbegin(); it != d_free.rend(); ++it) problem->d_free[it->first] = it->second;
+  if (bodies_changed) problem->bodies = bodies;
+}
+
 }  // namespace lcp_contact_solver

@@ -11,9 +11,11 @@ std::string CycleSolver::setParams(const lcs::SolverParams& params) { return sol
 CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
                                const lcp_contact_solver::Compliance& compliance, bool build_forces) {
   CycleOutput out;
-  out.error = toProblem(contacts, compliance, solver_.params().max_rows, &out.problem, &out.frames);
+  // Not validated here: the core's solve runs the same check (one pass over W, not two).
+  out.error = toProblem(contacts, compliance, solver_.params().max_rows, &out.problem, &out.frames,
+                        /*validate=*/false);
   if (out.error.empty()) {
-    out.result = solver_.solve(out.problem);
+    out.result = solver_.solveInPlace(out.problem);  // erp/softness without a copy of W
     if (out.result.status == lcs::SolveStatus::kInvalidInput)  // refused by the core's own checks
       out.error = out.result.message.empty() ? "invalid input" : out.result.message;
   }

@@ -9,9 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <memory>
 #include <numeric>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
@@ -169,35 +169,51 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
              ") names a contact beyond the " + std::to_string(nb) + " contacts";
     start[k + 1] = start[k] + static_cast<std::size_t>(sizes[i]) * sizes[j];
   }
-  // Blocks in (row, column) order; a repeated block is two equal neighbours there.
-  std::vector<std::size_t> order(blocks);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&msg](std::size_t a, std::size_t b) {
-    return std::make_pair(msg.block_rows[a], msg.block_cols[a]) < std::make_pair(msg.block_rows[b], msg.block_cols[b]);
-  });
-  for (std::size_t k = 1; k < blocks; ++k) {
-    const std::size_t a = order[k - 1], b = order[k];
-    if (msg.block_rows[a] == msg.block_rows[b] && msg.block_cols[a] == msg.block_cols[b])
-      return "block (" + std::to_string(msg.block_rows[b]) + ", " + std::to_string(msg.block_cols[b]) + ") is given twice";
+  auto key = [&msg](std::size_t k) { return std::make_pair(msg.block_rows[k], msg.block_cols[k]); };
+  // Blocks in (row, column) order; a repeated block is two equal neighbours there. A
+  // message written in that order (toComplianceMsg, the scene layer) is checked in one pass
+  // and needs no permutation.
+  bool in_order = true;
+  for (std::size_t k = 1; k < blocks && in_order; ++k) in_order = key(k - 1) < key(k);
+  std::vector<std::size_t> order;
+  if (!in_order) {
+    order.resize(blocks);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&key](std::size_t a, std::size_t b) { return key(a) < key(b); });
+    for (std::size_t k = 1; k < blocks; ++k)
+      if (key(order[k - 1]) == key(order[k]))
+        return "block (" + std::to_string(msg.block_rows[order[k]]) + ", " + std::to_string(msg.block_cols[order[k]]) +
+               ") is given twice";
   }
   if (msg.block_data.size() != start[blocks])
     return "block-sparse compliance has " + std::to_string(msg.block_data.size()) +
            " block_data values, its blocks need " + std::to_string(start[blocks]);
-  // The CSR arrays written in place: one copy of each block's values, no per-value append.
+  // The CSR arrays written in place: one copy of each block's values, no per-value append;
+  // in message order that copy is the whole of block_data at once (no zero fill first).
   lcs::BlockSparseMatrix sparse = lcs::BlockSparseMatrix::withBlockSizes(sizes);
   sparse.row_start.assign(nb + 1, 0);
   sparse.block_col.resize(blocks);
   sparse.value_start.resize(blocks);
-  sparse.values.resize(start[blocks]);
-  std::size_t value = 0;
-  for (std::size_t n = 0; n < blocks; ++n) {
-    const std::size_t k = order[n];
-    const std::size_t size = start[k + 1] - start[k];
-    ++sparse.row_start[msg.block_rows[k] + 1];
-    sparse.block_col[n] = static_cast<int>(msg.block_cols[k]);
-    sparse.value_start[n] = static_cast<int>(value);
-    std::copy(msg.block_data.begin() + start[k], msg.block_data.begin() + start[k] + size, sparse.values.begin() + value);
-    value += size;
+  if (in_order) {
+    sparse.values.assign(msg.block_data.begin(), msg.block_data.end());
+    for (std::size_t k = 0; k < blocks; ++k) {
+      ++sparse.row_start[msg.block_rows[k] + 1];
+      sparse.block_col[k] = static_cast<int>(msg.block_cols[k]);
+      sparse.value_start[k] = static_cast<int>(start[k]);
+    }
+  } else {
+    sparse.values.resize(start[blocks]);
+    std::size_t value = 0;
+    for (std::size_t n = 0; n < blocks; ++n) {
+      const std::size_t k = order[n];
+      const std::size_t size = start[k + 1] - start[k];
+      ++sparse.row_start[msg.block_rows[k] + 1];
+      sparse.block_col[n] = static_cast<int>(msg.block_cols[k]);
+      sparse.value_start[n] = static_cast<int>(value);
+      std::copy(msg.block_data.begin() + start[k], msg.block_data.begin() + start[k] + size,
+                sparse.values.begin() + value);
+      value += size;
+    }
   }
   for (std::size_t i = 0; i < nb; ++i) sparse.row_start[i + 1] += sparse.row_start[i];
   *W = std::move(sparse);
@@ -312,11 +328,11 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 }
 
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames) {
+                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
   *problem = lcs::Problem();
   std::string error = readContacts(contacts, max_rows, problem, frames);
   if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W, &problem->bodies);
-  if (error.empty()) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
+  if (error.empty() && validate) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
 }
@@ -435,23 +451,46 @@ lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
 
 std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::ContactForce>& forces) {
   std::vector<lcs::BodyPairWrench> wrenches;
-  std::map<std::pair<std::string, std::string>, std::size_t> index;
-  std::vector<Eigen::Vector3d> force_sum, torque_sum;
-  for (const lcs::ContactForce& f : forces) {
-    const auto key = std::make_pair(f.body_a, f.body_b);
-    auto it = index.find(key);
-    if (it == index.end()) {
-      it = index.emplace(key, wrenches.size()).first;
-      lcs::BodyPairWrench w;
-      w.body_a = f.body_a;
-      w.body_b = f.body_b;
-      wrenches.push_back(w);
-      force_sum.emplace_back(Eigen::Vector3d::Zero());
-      torque_sum.emplace_back(Eigen::Vector3d::Zero());
+  // Pairs in order of first appearance; the lookup by hash, and the previous contact's pair
+  // first (a simulator lists a pair's contacts together): no string copy per contact.
+  struct PairHash {
+    std::size_t operator()(const std::pair<const std::string*, const std::string*>& k) const {
+      const std::size_t a = std::hash<std::string>()(*k.first);
+      return a ^ (std::hash<std::string>()(*k.second) + 0x9e3779b97f4a7c15ULL + (a << 6) + (a >> 2));
     }
+  };
+  struct PairEqual {
+    bool operator()(const std::pair<const std::string*, const std::string*>& x,
+                    const std::pair<const std::string*, const std::string*>& y) const {
+      return *x.first == *y.first && *x.second == *y.second;
+    }
+  };
+  std::unordered_map<std::pair<const std::string*, const std::string*>, std::size_t, PairHash, PairEqual> index;
+  std::vector<Eigen::Vector3d> force_sum, torque_sum;
+  std::size_t last = 0;
+  for (const lcs::ContactForce& f : forces) {
+    std::size_t at;
+    if (!wrenches.empty() && wrenches[last].body_a == f.body_a && wrenches[last].body_b == f.body_b) {
+      at = last;
+    } else {
+      const auto found = index.find({&f.body_a, &f.body_b});  // keys point into `forces`
+      if (found != index.end()) {
+        at = found->second;
+      } else {
+        at = wrenches.size();
+        index.emplace(std::make_pair(&f.body_a, &f.body_b), at);
+        lcs::BodyPairWrench w;
+        w.body_a = f.body_a;
+        w.body_b = f.body_b;
+        wrenches.push_back(w);
+        force_sum.emplace_back(Eigen::Vector3d::Zero());
+        torque_sum.emplace_back(Eigen::Vector3d::Zero());
+      }
+    }
+    last = at;
     const Eigen::Vector3d force = toEigen(f.force);
-    force_sum[it->second] += force;
-    torque_sum[it->second] += toEigen(f.position).cross(force) + toEigen(f.torque);
+    force_sum[at] += force;
+    torque_sum[at] += toEigen(f.position).cross(force) + toEigen(f.torque);
   }
   for (std::size_t k = 0; k < wrenches.size(); ++k) {
     wrenches[k].wrench.force = toVector3(force_sum[k]);

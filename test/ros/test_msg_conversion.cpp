@@ -4,6 +4,7 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/ros/cycle_log.h"
+#include "lcp_contact_solver/ros/cycle_solver.h"
 #include "lcp_contact_solver/ros/markers.h"
 #include "lcp_contact_solver/ros/msg_conversion.h"
 #include "lcp_contact_solver/ros/input_queue.h"
@@ -113,6 +114,63 @@ TEST(ToProblem, BlockSparseEqualsDense) {
   const lcs::SolveResult b = lcs::solveProblem(sparse.problem, defaultSolverParams());
   EXPECT_TRUE(a.converged);
   EXPECT_LT((a.forces - b.forces).norm(), 1e-9);
+}
+
+// A message in (row, column) block order is read without sorting; any other order gives the
+// same matrix through the sort.
+TEST(ToProblem, BlockSparseInAnyBlockOrderIsTheSameMatrix) {
+  const Scene scene = makeScene(10, kStamp, true);
+  const Converted in_order = convert(scene);
+  ASSERT_EQ(in_order.error, "");
+  const int sizes[] = {3, 3, 1, 2};
+  const lcs::Compliance& W = scene.compliance;
+  std::vector<std::size_t> start(W.block_rows.size() + 1, 0);
+  for (std::size_t k = 0; k < W.block_rows.size(); ++k)
+    start[k + 1] = start[k] + sizes[W.block_rows[k]] * sizes[W.block_cols[k]];
+  Scene reversed = scene;
+  reversed.compliance.block_rows.clear();
+  reversed.compliance.block_cols.clear();
+  reversed.compliance.block_data.clear();
+  for (std::size_t k = W.block_rows.size(); k-- > 0;) {
+    reversed.compliance.block_rows.push_back(W.block_rows[k]);
+    reversed.compliance.block_cols.push_back(W.block_cols[k]);
+    reversed.compliance.block_data.insert(reversed.compliance.block_data.end(), W.block_data.begin() + start[k],
+                                          W.block_data.begin() + start[k + 1]);
+  }
+  ASSERT_GT(W.block_rows.size(), 2u);
+  const Converted sorted = convert(reversed);
+  ASSERT_EQ(sorted.error, "");
+  const auto& a = std::get<lcs::BlockSparseMatrix>(in_order.problem.W);
+  const auto& b = std::get<lcs::BlockSparseMatrix>(sorted.problem.W);
+  EXPECT_EQ(a.values, b.values);
+  EXPECT_EQ(a.block_col, b.block_col);
+  EXPECT_EQ(a.row_start, b.row_start);
+  EXPECT_EQ(a.value_start, b.value_start);
+  EXPECT_EQ(a.validate(), "");
+  // A repeated block is found in either order.
+  for (const Scene* s : {&scene, static_cast<const Scene*>(&reversed)}) {
+    Scene twice = *s;
+    twice.compliance.block_rows.push_back(twice.compliance.block_rows.back());
+    twice.compliance.block_cols.push_back(twice.compliance.block_cols.back());
+    const std::size_t n = sizes[twice.compliance.block_rows.back()] * sizes[twice.compliance.block_cols.back()];
+    twice.compliance.block_data.insert(twice.compliance.block_data.end(), n, 0.5);
+    EXPECT_NE(convert(twice).error.find("is given twice"), std::string::npos) << convert(twice).error;
+  }
+}
+
+// CycleSolver leaves validation to the core's solve: a non-finite W is still refused, with
+// the sentence toProblem gives.
+TEST(CycleSolver, ANonFiniteComplianceIsRejectedWithToProblemsSentence) {
+  Scene scene = makeScene(10, kStamp, true);
+  scene.compliance.block_data[4] = std::numeric_limits<double>::quiet_NaN();
+  const Converted checked = convert(scene);
+  ASSERT_NE(checked.error, "");
+  CycleSolver cycle(defaultSolverParams());
+  const CycleOutput out = cycle.solve(scene.contacts, scene.compliance);
+  EXPECT_TRUE(out.rejected());
+  EXPECT_EQ(out.error, checked.error);
+  EXPECT_EQ(out.stats.status_code, lcs::SolverStats::INVALID_INPUT);
+  EXPECT_FALSE(out.has_forces);
 }
 
 TEST(ToProblem, BlockSparseWithMissingBlocksIsZeroThere) {
@@ -362,6 +420,34 @@ TEST(SumBodyPairWrenches, SumsForceAndTorquePerPair) {
   const Eigen::Vector3d torque =
       toEigen(msg.forces[0].position).cross(f0) + toEigen(msg.forces[1].position).cross(f1);
   EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.torque) - torque).norm(), 0.0, 1e-15);
+}
+
+// Pairs interleaved (a simulator need not list a pair's contacts together): one wrench per
+// pair in order of first appearance, each the sum of its own contacts only.
+TEST(SumBodyPairWrenches, InterleavedPairsAreSummedApart) {
+  auto force = [](const std::string& a, const std::string& b, double fx, double px) {
+    lcs::ContactForce f;
+    f.body_a = a;
+    f.body_b = b;
+    f.force.x = fx;
+    f.position.y = px;
+    return f;
+  };
+  const std::vector<lcs::ContactForce> forces = {force("a", "b", 1, 0), force("c", "d", 10, 1), force("a", "b", 2, 2),
+                                                 force("b", "a", 100, 0), force("c", "d", 20, 0),
+                                                 force("a", "bc", 1000, 0), force("ab", "c", 5000, 0)};
+  const std::vector<lcs::BodyPairWrench> w = sumBodyPairWrenches(forces);
+  ASSERT_EQ(w.size(), 5u);
+  const std::pair<std::string, std::string> names[] = {{"a", "b"}, {"c", "d"}, {"b", "a"}, {"a", "bc"}, {"ab", "c"}};
+  const double sums[] = {3, 30, 100, 1000, 5000};
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(w[k].body_a, names[k].first);
+    EXPECT_EQ(w[k].body_b, names[k].second);
+    EXPECT_EQ(w[k].wrench.force.x, sums[k]) << k;
+  }
+  // Torque p × f: (0, y, 0) × (x, 0, 0) = (0, 0, -x y).
+  EXPECT_EQ(w[0].wrench.torque.z, -(1 * 0.0 + 2 * 2.0));
+  EXPECT_EQ(w[1].wrench.torque.z, -(10 * 1.0));
 }
 
 // A rolling contact (6 rows): its spin and rolling rows come back as a torque on body_a,

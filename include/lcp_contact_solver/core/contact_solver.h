@@ -9,7 +9,9 @@
 
 #include <Eigen/Core>
 
+#include <chrono>
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -27,12 +29,19 @@ class ContactSolver {
   // Solves `problem` with its erp/softness applied (stabilization.h); the result's d and
   // residual are those of the problem as solved.
   SolveResult solve(const Problem& problem);
+  // The same solve and result without copying W for erp/softness: they are applied to
+  // `problem` itself (d_free's normal rows, W's normal diagonal) and undone bit for bit
+  // before this returns. Nothing else may read `problem` meanwhile.
+  SolveResult solveInPlace(Problem& problem);
 
   // Forgets the forces remembered for warm starting.
   void resetWarmStart() { warm_start_.clear(); }
   std::size_t warmStartSize() const { return warm_start_.size(); }
 
  private:
+  // After validation and stabilization: `stated` is the problem as solved.
+  SolveResult solveStated(const Problem& stated, std::chrono::steady_clock::time_point start);
+  SolveResult invalidInput(const std::string& error) const;
   Eigen::VectorXd initialGuess(const Problem& problem, const std::vector<int>& offsets) const;
   void rememberForces(const Problem& problem, const std::vector<int>& offsets,
                       const Eigen::VectorXd& lambda);

@@ -17,7 +17,11 @@
 #include "lcp_contact_solver/core/problem.h"
 #include "lcp_contact_solver/core/solver_params.h"
 
+#include <cstddef>
+#include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace lcp_contact_solver {
 
@@ -31,5 +35,23 @@ bool needsStabilization(const Problem& problem, const SolverParams& params);
 // Applies both to *problem (d_free and the diagonal of W). Returns an empty string, or why
 // it cannot (velocity level without a time step).
 std::string applyStabilization(const SolverParams& params, Problem* problem);
+
+// The values applyStabilizationInPlace overwrote, to put back bit for bit.
+struct StabilizationUndo {
+  std::vector<std::pair<Eigen::Index, double>> d_free;  // row, value before
+  std::vector<std::pair<double*, double>> w;            // W's diagonal entry, value before
+  std::shared_ptr<const BodyCompliance> bodies;         // the body form before softness
+  bool bodies_changed = false;
+
+  void restore(Problem* problem) const;
+};
+
+// applyStabilization without copying W: d_free's normal rows and W's normal diagonal are
+// changed where they are, the old values kept in *undo. The numbers are those of
+// applyStabilization. Returns false, with nothing changed, when it cannot: a block-sparse W
+// without the diagonal block a soft contact needs (applyStabilization inserts one). On an
+// error (*error set, as applyStabilization's) nothing is changed either.
+bool applyStabilizationInPlace(const SolverParams& params, Problem* problem, StabilizationUndo* undo,
+                               std::string* error);
 
 }  // namespace lcp_contact_solver

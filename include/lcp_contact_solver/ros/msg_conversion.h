@@ -46,9 +46,12 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 
 // Builds the core problem and the contact frames from a contact array and its
 // compliance. Sizes are checked against the contacts before anything is allocated;
-// `max_rows` > 0 refuses larger problems. Stamps are not compared here.
+// `max_rows` > 0 refuses larger problems. Stamps are not compared here. `validate` false
+// leaves out lcs::validateProblem (non-finite values in W and d_free): for a caller whose
+// next step is ContactSolver::solve, which runs the same check (CycleSolver).
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames);
+                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames,
+                      bool validate = true);
 
 // Body names of one contact, for toContactArrayMsg.
 struct ContactBodies {
