@@ -32,6 +32,7 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/core/scalar_rows.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -694,6 +695,14 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
 
 KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
                             const FrictionPolygon* polygon = nullptr) {
+  if (fitsScalarRows(*ctx.problem)) {  // every contact one row: the scalar-row sweep (scalar_rows.h)
+    KernelReport report = runScalarRowGaussSeidel(ctx, lambda, [&](const Eigen::VectorXd& l, const Eigen::VectorXd& d) {
+      return polygon != nullptr ? pyramidResidual(*ctx.problem, ctx.mu, *polygon, l, d, ctx.ignored)
+                                : naturalMapResidual(*ctx.problem, ctx.mu, l, d, ctx.ignored);
+    });
+    if (polygon != nullptr) report.friction_model = ctx.params->friction_model;
+    return report;
+  }
   std::vector<LocalBlock> blocks;
   if (std::string err = prepareBlocks(ctx, blocks, polygon); !err.empty()) {
     KernelReport report;
