@@ -246,30 +246,34 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
   BlockSparseMatrix R;
   R.block_offset.assign(1, 0);
   R.row_start.assign(1, 0);
-  std::size_t blocks = 0, values = 0;  // sized once: no regrowth while copying
+  // Sized once from the stored blocks' extents (values of block row i run from
+  // value_start[row_start[i]] to the next row's): no regrowth while copying.
+  std::size_t blocks = 0, values = 0;
+  const auto valueAt = [&](int b) {
+    return b < static_cast<int>(W.value_start.size()) ? static_cast<std::size_t>(W.value_start[b]) : W.values.size();
+  };
   for (int i : contacts) {
     blocks += W.row_start[i + 1] - W.row_start[i];
-    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b)
-      values += problem.contacts[i].rows * problem.contacts[W.block_col[b]].rows;
+    values += valueAt(W.row_start[i + 1]) - valueAt(W.row_start[i]);
   }
   R.block_offset.reserve(contacts.size() + 1);
   R.row_start.reserve(contacts.size() + 1);
   R.block_col.resize(blocks);
   R.value_start.resize(blocks);
   R.values.resize(values);
+  const int* offset = W.block_offset.data();
   std::size_t nb = 0, nv = 0;
   for (int i : contacts) {
-    const int rows_i = problem.contacts[i].rows;
+    const int rows_i = offset[i + 1] - offset[i];
     R.block_offset.push_back(R.block_offset.back() + rows_i);
     for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+      const int col = W.block_col[b];
       // Blocks to other islands are zero (findIslands) and left out.
-      if (island_of[W.block_col[b]] != island) continue;
-      const int j = position[W.block_col[b]];
-      const int size = rows_i * problem.contacts[W.block_col[b]].rows;
-      R.block_col[nb] = j;
+      if (island_of[col] != island) continue;
+      const int size = rows_i * (offset[col + 1] - offset[col]);
+      R.block_col[nb] = position[col];
       R.value_start[nb++] = static_cast<int>(nv);
-      const double* v = W.values.data() + W.value_start[b];
-      for (int k = 0; k < size; ++k) R.values[nv + k] = v[k];
+      std::copy_n(W.values.data() + W.value_start[b], size, R.values.data() + nv);
       nv += size;
     }
     R.row_start.push_back(static_cast<int>(nb));
@@ -310,6 +314,7 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
     isl.contacts = std::move(islands.contacts[k]);
     isl.problem = buildIsland(problem, ctx.offsets, isl.contacts, islands.island_of, position);
     norms[k] = isl.problem.d_free.norm();
+    isl.rows.reserve(isl.problem.d_free.size());
     for (int i : isl.contacts)
       for (int r = ctx.offsets[i]; r < ctx.offsets[i + 1]; ++r) isl.rows.push_back(r);
   }
