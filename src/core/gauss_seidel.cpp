@@ -696,10 +696,7 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
 KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
                             const FrictionPolygon* polygon = nullptr) {
   if (fitsScalarRows(*ctx.problem)) {  // every contact one row: the scalar-row sweep (scalar_rows.h)
-    KernelReport report = runScalarRowGaussSeidel(ctx, lambda, [&](const Eigen::VectorXd& l, const Eigen::VectorXd& d) {
-      return polygon != nullptr ? pyramidResidual(*ctx.problem, ctx.mu, *polygon, l, d, ctx.ignored)
-                                : naturalMapResidual(*ctx.problem, ctx.mu, l, d, ctx.ignored);
-    });
+    KernelReport report = runScalarRowGaussSeidel(ctx, lambda);
     if (polygon != nullptr) report.friction_model = ctx.params->friction_model;
     return report;
   }

@@ -67,7 +67,7 @@ double storedDiagonal(const BlockSparseMatrix& W, int i) {
 // law with the others' forces: it solves the LCP. Work per sweep: at most one multiply-add per
 // stored entry (12 bytes read, d_i read and written) plus a few loads per row; the residual of
 // the stopping test reads the maintained d (O(rows), no product with W).
-KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda, const ScalarResidual& residualOf) {
+KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const Problem& problem = *ctx.problem;
   const SolverParams& params = *ctx.params;
   const auto& W = std::get<BlockSparseMatrix>(problem.W);
@@ -105,6 +105,21 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
   const int* index = columns.index.data();
   const double* value = columns.value.data();
 
+  // The natural-map residual (residual.h; the pyramid's is the same on one-row contacts):
+  // e_i = min(λ_i, d_i) on unilateral rows, d_i on bilateral ones, over |d_free|. Its row
+  // loop reads two flat arrays and the kinds, not a contact record per row.
+  const double q_norm = problem.d_free.norm();
+  const double scale = q_norm > 0.0 ? q_norm : 1.0;
+  auto residualOf = [&](const Eigen::VectorXd& lv, const Eigen::VectorXd& dv) {
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+      if (kind[i] == kSkipRow) continue;
+      const double e = kind[i] == kUnilateralRow ? std::min(lv[i], dv[i]) : dv[i];
+      sum += e * e;
+    }
+    const double residual = std::sqrt(sum) / scale;
+    return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
+  };
   const bool sofa = params.stopping_rule == StoppingRule::kSofa;
   Eigen::VectorXd d;
   ctx.computeD(lambda, d);

@@ -18,7 +18,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 namespace lcp_contact_solver {
@@ -42,12 +41,10 @@ bool fitsScalarRows(const Problem& problem);
 // to d in one contiguous walk.
 ScalarRows scalarColumnsOf(const BlockSparseMatrix& W);
 
-// Residual of (λ, d) the kernel stops on: the disc's natural map or the pyramid's.
-using ScalarResidual = std::function<double(const Eigen::VectorXd& lambda, const Eigen::VectorXd& d)>;
-
 // Projected Gauss-Seidel on scalar rows (fitsScalarRows(*ctx.problem) must hold): unilateral
 // rows λ_i = max(0, ·), one-row bilateral rows free, ignored rows skipped; the stopping rules,
-// sor, maxIt, time budget and best-iterate return of the block-sparse sweep (gauss_seidel.cpp).
-KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda, const ScalarResidual& residual);
+// sor, maxIt, time budget and best-iterate return of the block-sparse sweep (gauss_seidel.cpp),
+// on the natural-map residual (residual.h), which on one-row contacts is also the pyramid's.
+KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
 }  // namespace lcp_contact_solver
