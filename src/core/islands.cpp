@@ -176,16 +176,23 @@ Islands findIslands(const Problem& problem) {
         if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);  // one pass over W
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
-    for (int i = 0; i < sparse->blockCount(); ++i)
+    for (int i = 0; i < sparse->blockCount(); ++i) {
+      int root_i = sets.find(i);  // kept current across the row: one find per block
       for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
         const int j = sparse->block_col[b];
-        if (j == i || sets.find(i) == sets.find(j)) continue;  // values read only across islands
+        if (j == i) continue;
+        const int root_j = sets.find(j);
+        if (root_j == root_i) continue;  // values read only across islands
         const int size = (sparse->block_offset[i + 1] - sparse->block_offset[i]) *
                          (sparse->block_offset[j + 1] - sparse->block_offset[j]);
         const double* v = sparse->values.data() + sparse->value_start[b];
         // A stored block of zeros couples nothing.
-        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) sets.unite(i, j);
+        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) {
+          sets.parent[std::max(root_i, root_j)] = std::min(root_i, root_j);
+          root_i = std::min(root_i, root_j);
+        }
       }
+    }
   }
   Islands out;
   out.island_of.assign(nc, -1);
@@ -273,7 +280,9 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
       const int size = rows_i * (offset[col + 1] - offset[col]);
       R.block_col[nb] = position[col];
       R.value_start[nb++] = static_cast<int>(nv);
-      std::copy_n(W.values.data() + W.value_start[b], size, R.values.data() + nv);
+      const double* v = W.values.data() + W.value_start[b];
+      if (size == 1) R.values[nv] = *v;  // scalar rows: no copy call per entry
+      else std::copy_n(v, size, R.values.data() + nv);
       nv += size;
     }
     R.row_start.push_back(static_cast<int>(nb));
