@@ -98,6 +98,12 @@ class DenseReduced : public ReducedSystem {
  public:
   // W + r I is written by the caller into W() (n × n, column-major).
   DenseReduced(DenseScratch& s, int n) : s_(s), n_(n) { s_.W.resize(static_cast<std::size_t>(n) * n); }
+  // A large dense W is not kept past its solve (the scratch is for many small islands).
+  ~DenseReduced() override {
+    constexpr std::size_t kKeep = 256 * 256;
+    if (s_.W.capacity() > kKeep) std::vector<double>().swap(s_.W);
+    if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
+  }
   Eigen::Map<Eigen::MatrixXd> W() { return {s_.W.data(), n_, n_}; }
   bool factorize(const std::vector<char>& active) override {
     s_.index.clear();
