@@ -28,6 +28,7 @@
 // for ours_pgs on one-row problems (scalar rows, scalar_rows.h) the bytes its sweeps read per
 // second beside the machine's stream bandwidth (a triad a = b + s c over 3 × 64 MB, best of 5).
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/scalar_rows.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
@@ -259,8 +260,11 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
         const std::size_t stored = std::holds_alternative<BlockSparseMatrix>(mp.problem.W)
                                        ? std::get<BlockSparseMatrix>(mp.problem.W).values.size()
                                        : std::size_t(base.rows) * base.rows;
-        std::fprintf(stderr, "%s step %d: %d contacts, %d rows, %zu stored W entries\n", name.c_str(), step,
-                     base.contacts, base.rows, stored);
+        const Islands islands = findIslands(mp.problem);
+        std::size_t largest = 0;
+        for (const auto& list : islands.contacts) largest = std::max(largest, list.size());
+        std::fprintf(stderr, "%s step %d: %d contacts, %d rows, %zu stored W entries, %d islands (largest %zu contacts)\n",
+                     name.c_str(), step, base.contacts, base.rows, stored, islands.count(), largest);
       }
     }
     forwardToConstraints(world->model(), world->data(), true);  // the reference trajectory
