@@ -24,11 +24,16 @@
 //     (opt.tolerance = T, opt.iterations as the model sets it): row "mujoco_S_tol", its
 //     iterations MuJoCo's solver_iter.
 // Times are the minimum of --repeat runs. CSV: model,step,time,contacts,rows,solver,
-// iterations,residual,reached,seconds. A summary table (median per step) goes to stdout.
+// iterations,residual,reached,seconds. A summary table (median per step) goes to stdout, and
+// for ours_pgs on one-row problems (scalar rows, scalar_rows.h) the bytes its sweeps read per
+// second beside the machine's stream bandwidth (a triad a = b + s c over 3 × 64 MB, best of 5).
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/islands.h"
+#include "lcp_contact_solver/core/scalar_rows.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -37,6 +42,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 using namespace lcp_contact_solver;
@@ -65,7 +71,32 @@ struct Row {
   int step = 0, contacts = 0, rows = 0, iterations = 0;
   double time = 0, residual = 0, seconds = 0;
   bool reached = false;
+  double sweep_bytes = 0;  // ours on scalar rows: bytes a full sweep reads (0 otherwise)
 };
+
+// Best-of-5 STREAM triad bandwidth (bytes/s), counted as STREAM does: 24 bytes per element.
+double triadBandwidth() {
+  const std::size_t n = std::size_t(8) << 20;  // 64 MB per array
+  std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+  double best = 1e300;
+  for (int r = 0; r < 5; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double scale = 1.0 + 1e-3 * r;
+    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + scale * c[i];
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  volatile double sink = a[n / 2];
+  (void)sink;
+  return 24.0 * double(n) / best;
+}
+
+// Bytes one scalar-row sweep reads at most: per stored entry an index and a value (the d it
+// updates stays in cache), per row the column start, inverse diagonal, kind, λ and d.
+double scalarSweepBytes(const Problem& p) {
+  if (!fitsScalarRows(p)) return 0.0;
+  const auto& W = std::get<BlockSparseMatrix>(p.W);
+  return 12.0 * double(W.values.size()) + 29.0 * double(W.blockCount());
+}
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -190,6 +221,7 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
           Row r = base;
           r.solver = "ours_" + solver_name + suffix;
           r.seconds = 1e300;
+          r.sweep_bytes = solver_name == "pgs" ? scalarSweepBytes(mp.problem) : 0.0;
           ContactSolver used = solver;
           for (int k = 0; k < o.repeat; ++k) {
             ContactSolver trial = solver;  // the same warm start each repeat
@@ -225,7 +257,14 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
             rows->push_back(t);
           }
         }
-        std::fprintf(stderr, "%s step %d: %d contacts, %d rows\n", name.c_str(), step, base.contacts, base.rows);
+        const std::size_t stored = std::holds_alternative<BlockSparseMatrix>(mp.problem.W)
+                                       ? std::get<BlockSparseMatrix>(mp.problem.W).values.size()
+                                       : std::size_t(base.rows) * base.rows;
+        const Islands islands = findIslands(mp.problem);
+        std::size_t largest = 0;
+        for (const auto& list : islands.contacts) largest = std::max(largest, list.size());
+        std::fprintf(stderr, "%s step %d: %d contacts, %d rows, %zu stored W entries, %d islands (largest %zu contacts)\n",
+                     name.c_str(), step, base.contacts, base.rows, stored, islands.count(), largest);
       }
     }
     forwardToConstraints(world->model(), world->data(), true);  // the reference trajectory
@@ -323,6 +362,25 @@ int main(int argc, char** argv) {
     }
     std::printf("%-14s %-20s %6zu %7d %6.0f %12.0f %10.3f %12.1e\n", key.first.c_str(), key.second.c_str(), g.size(),
                 reached, median(n), median(it), 1e3 * median(t), worst);
+  }
+  // Sweep bandwidth of ours on scalar rows: bytes of a full sweep × sweeps / solve time (setup
+  // and the stopping test included, so a lower bound of the sweep's own rate; with islands,
+  // sweeps = the largest island's count, an upper bound of the bytes).
+  bool header = false;
+  for (const auto& key : order) {
+    std::vector<double> rate, kb;
+    for (const Row* r : groups[key])
+      if (r->sweep_bytes > 0 && r->seconds > 0) {
+        rate.push_back(r->sweep_bytes * r->iterations / r->seconds);
+        kb.push_back(r->sweep_bytes / 1024.0);
+      }
+    if (rate.empty()) continue;
+    if (!header) {
+      std::printf("stream triad: %.1f GB/s\n", triadBandwidth() / 1e9);
+      header = true;
+    }
+    std::printf("%-14s %-20s scalar-row sweep: %.0f KB per sweep, %.2f GB/s (median over steps)\n", key.first.c_str(),
+                key.second.c_str(), median(kb), median(rate) / 1e9);
   }
   return 0;
 }

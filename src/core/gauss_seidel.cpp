@@ -32,6 +32,7 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/core/scalar_rows.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -269,10 +270,11 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     }
     Eigen::MatrixXd D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
     D.diagonal().array() += r;
-    const std::string where = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
+    // Named only for a message: no string per contact per solve.
+    const auto where = [&] { return "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")"; };
     if (c.type == ContactType::kBilateral) {
       Eigen::FullPivLU<Eigen::MatrixXd> lu(D);
-      if (!lu.isInvertible()) return where + " has a singular bilateral block of W";
+      if (!lu.isInvertible()) return where() + " has a singular bilateral block of W";
       blk.kind = LocalKind::kBilateral;
       blk.bilateral_block = D;
       blk.bilateral_inverse = lu.inverse();
@@ -281,7 +283,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     if (!(D(0, 0) > 0.0)) {
       char value[32];
       std::snprintf(value, sizeof(value), "%.6g", D(0, 0));  // to_string prints 1e-20 as 0.000000
-      return where + " has W_nn = " + value + " <= 0; set minW or regularizationTerm";
+      return where() + " has W_nn = " + value + " <= 0; set minW or regularizationTerm";
     }
     blk.inv_nn = 1.0 / D(0, 0);
     const bool extended = c.type == ContactType::kTorsional || c.type == ContactType::kRolling;
@@ -291,7 +293,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     }
     blk.kind = polygon != nullptr ? LocalKind::kPolygon : LocalKind::kCoulomb;
     if (extended) {
-      if (std::string err = prepareExtendedRows(c, D, where, blk); !err.empty()) return err;
+      if (std::string err = prepareExtendedRows(c, D, where(), blk); !err.empty()) return err;
       blk.kind = LocalKind::kCoulombExtended;
     }
     blk.D = D.topLeftCorner<3, 3>();
@@ -314,7 +316,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     blk.tangent_eigen = eig.eigenvalues();
     const double a_max = blk.tangent_eigen.maxCoeff();
     if (!blk.tangent_symmetric && !(a_max > 0.0))
-      return where + " has a tangential block of W with no positive eigenvalue";
+      return where() + " has a tangential block of W with no positive eigenvalue";
     blk.tangent_step = a_max > 0.0 ? 1.0 / a_max : 0.0;
   }
   return "";
@@ -694,6 +696,11 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
 
 KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
                             const FrictionPolygon* polygon = nullptr) {
+  if (fitsScalarRows(*ctx.problem)) {  // every contact one row: the scalar-row sweep (scalar_rows.h)
+    KernelReport report = runScalarRowGaussSeidel(ctx, lambda);
+    if (polygon != nullptr) report.friction_model = ctx.params->friction_model;
+    return report;
+  }
   std::vector<LocalBlock> blocks;
   if (std::string err = prepareBlocks(ctx, blocks, polygon); !err.empty()) {
     KernelReport report;

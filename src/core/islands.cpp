@@ -176,16 +176,23 @@ Islands findIslands(const Problem& problem) {
         if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);  // one pass over W
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
-    for (int i = 0; i < sparse->blockCount(); ++i)
+    for (int i = 0; i < sparse->blockCount(); ++i) {
+      int root_i = sets.find(i);  // kept current across the row: one find per block
       for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
         const int j = sparse->block_col[b];
-        if (j == i || sets.find(i) == sets.find(j)) continue;  // values read only across islands
+        if (j == i) continue;
+        const int root_j = sets.find(j);
+        if (root_j == root_i) continue;  // values read only across islands
         const int size = (sparse->block_offset[i + 1] - sparse->block_offset[i]) *
                          (sparse->block_offset[j + 1] - sparse->block_offset[j]);
         const double* v = sparse->values.data() + sparse->value_start[b];
         // A stored block of zeros couples nothing.
-        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) sets.unite(i, j);
+        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) {
+          sets.parent[std::max(root_i, root_j)] = std::min(root_i, root_j);
+          root_i = std::min(root_i, root_j);
+        }
       }
+    }
   }
   Islands out;
   out.island_of.assign(nc, -1);
@@ -246,30 +253,36 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
   BlockSparseMatrix R;
   R.block_offset.assign(1, 0);
   R.row_start.assign(1, 0);
-  std::size_t blocks = 0, values = 0;  // sized once: no regrowth while copying
+  // Sized once from the stored blocks' extents (values of block row i run from
+  // value_start[row_start[i]] to the next row's): no regrowth while copying.
+  std::size_t blocks = 0, values = 0;
+  const auto valueAt = [&](int b) {
+    return b < static_cast<int>(W.value_start.size()) ? static_cast<std::size_t>(W.value_start[b]) : W.values.size();
+  };
   for (int i : contacts) {
     blocks += W.row_start[i + 1] - W.row_start[i];
-    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b)
-      values += problem.contacts[i].rows * problem.contacts[W.block_col[b]].rows;
+    values += valueAt(W.row_start[i + 1]) - valueAt(W.row_start[i]);
   }
   R.block_offset.reserve(contacts.size() + 1);
   R.row_start.reserve(contacts.size() + 1);
   R.block_col.resize(blocks);
   R.value_start.resize(blocks);
   R.values.resize(values);
+  const int* offset = W.block_offset.data();
   std::size_t nb = 0, nv = 0;
   for (int i : contacts) {
-    const int rows_i = problem.contacts[i].rows;
+    const int rows_i = offset[i + 1] - offset[i];
     R.block_offset.push_back(R.block_offset.back() + rows_i);
     for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+      const int col = W.block_col[b];
       // Blocks to other islands are zero (findIslands) and left out.
-      if (island_of[W.block_col[b]] != island) continue;
-      const int j = position[W.block_col[b]];
-      const int size = rows_i * problem.contacts[W.block_col[b]].rows;
-      R.block_col[nb] = j;
+      if (island_of[col] != island) continue;
+      const int size = rows_i * (offset[col + 1] - offset[col]);
+      R.block_col[nb] = position[col];
       R.value_start[nb++] = static_cast<int>(nv);
       const double* v = W.values.data() + W.value_start[b];
-      for (int k = 0; k < size; ++k) R.values[nv + k] = v[k];
+      if (size == 1) R.values[nv] = *v;  // scalar rows: no copy call per entry
+      else std::copy_n(v, size, R.values.data() + nv);
       nv += size;
     }
     R.row_start.push_back(static_cast<int>(nb));
@@ -310,6 +323,7 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
     isl.contacts = std::move(islands.contacts[k]);
     isl.problem = buildIsland(problem, ctx.offsets, isl.contacts, islands.island_of, position);
     norms[k] = isl.problem.d_free.stableNorm();
+    isl.rows.reserve(isl.problem.d_free.size());
     for (int i : isl.contacts)
       for (int r = ctx.offsets[i]; r < ctx.offsets[i + 1]; ++r) isl.rows.push_back(r);
   }

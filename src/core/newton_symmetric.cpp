@@ -82,35 +82,62 @@ class ReducedSystem {
   virtual Eigen::VectorXd diagonal() const = 0;  // of W + r I
 };
 
+// Dense storage of one solve, kept per thread: the islands of a solve (and the solves of a
+// stream) reuse its capacity, so a small island's Newton allocates no matrix.
+struct DenseScratch {
+  std::vector<double> W, M, b;
+  std::vector<int> index;
+};
+
+DenseScratch& denseScratch() {
+  thread_local DenseScratch scratch;
+  return scratch;
+}
+
 class DenseReduced : public ReducedSystem {
  public:
-  explicit DenseReduced(Eigen::MatrixXd W) : W_(std::move(W)) {}
+  // W + r I is written by the caller into W() (n × n, column-major).
+  DenseReduced(DenseScratch& s, int n) : s_(s), n_(n) { s_.W.resize(static_cast<std::size_t>(n) * n); }
+  // A large dense W is not kept past its solve (the scratch is for many small islands).
+  ~DenseReduced() override {
+    constexpr std::size_t kKeep = 256 * 256;
+    if (s_.W.capacity() > kKeep) std::vector<double>().swap(s_.W);
+    if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
+  }
+  Eigen::Map<Eigen::MatrixXd> W() { return {s_.W.data(), n_, n_}; }
   bool factorize(const std::vector<char>& active) override {
-    index_.clear();
-    for (int i = 0; i < static_cast<int>(active.size()); ++i)
-      if (active[i]) index_.push_back(i);
-    const int m = static_cast<int>(index_.size());
-    M_.resize(m, m);
-    for (int c = 0; c < m; ++c)
-      for (int r = c; r < m; ++r) M_(r, c) = W_(index_[r], index_[c]);  // LLT reads the lower half
-    llt_.compute(M_);
-    return llt_.info() == Eigen::Success;
+    s_.index.clear();
+    for (int i = 0; i < n_; ++i)
+      if (active[i]) s_.index.push_back(i);
+    m_ = static_cast<int>(s_.index.size());
+    s_.M.resize(static_cast<std::size_t>(m_) * m_);
+    Eigen::Map<Eigen::MatrixXd> M(s_.M.data(), m_, m_);
+    const Eigen::Map<const Eigen::MatrixXd> W(s_.W.data(), n_, n_);
+    for (int c = 0; c < m_; ++c)
+      for (int r = c; r < m_; ++r) M(r, c) = W(s_.index[r], s_.index[c]);  // LLT reads the lower half
+    // In place (Eigen's blocked LLᵀ; fails unless W_AA > 0): L overwrites M's lower half.
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(M);
+    return llt.info() == Eigen::Success;
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
     x.setZero(rhs.size());
-    if (index_.empty()) return;
-    b_ = rhs(index_);
-    y_ = llt_.solve(b_);
-    x(index_) = y_;
+    if (m_ == 0) return;
+    s_.b.resize(m_);
+    Eigen::Map<Eigen::VectorXd> b(s_.b.data(), m_);
+    for (int k = 0; k < m_; ++k) b[k] = rhs[s_.index[k]];
+    const Eigen::Map<const Eigen::MatrixXd> L(s_.M.data(), m_, m_);
+    L.triangularView<Eigen::Lower>().solveInPlace(b);
+    L.triangularView<Eigen::Lower>().adjoint().solveInPlace(b);
+    for (int k = 0; k < m_; ++k) x[s_.index[k]] = b[k];
   }
-  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override { u.noalias() = W_ * lambda; }
-  Eigen::VectorXd diagonal() const override { return W_.diagonal(); }
+  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
+    u.noalias() = Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_) * lambda;
+  }
+  Eigen::VectorXd diagonal() const override { return Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_).diagonal(); }
 
  private:
-  Eigen::MatrixXd W_, M_;
-  std::vector<int> index_;
-  Eigen::VectorXd b_, y_;
-  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt_;  // blocked: faster than LDLT; fails unless W_AA > 0
+  DenseScratch& s_;
+  int n_ = 0, m_ = 0;
 };
 
 class SparseReduced : public ReducedSystem {
@@ -150,12 +177,13 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   const auto* blocks = std::get_if<BlockSparseMatrix>(&p.W);
   const bool dense_pattern = blocks != nullptr && 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
   if (dense != nullptr || n <= kDenseMaxRows || dense_pattern) {
-    Eigen::MatrixXd W;
+    auto system = std::make_unique<DenseReduced>(denseScratch(), n);
+    Eigen::Map<Eigen::MatrixXd> W = system->W();
     if (dense != nullptr) {
       W = *dense;
     } else {  // scatter the blocks (toDense's temporaries cost more than the island's solve)
       const auto& B = std::get<BlockSparseMatrix>(p.W);
-      W.setZero(n, n);
+      W.setZero();
       for (int bi = 0; bi < B.blockCount(); ++bi)
         for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
           const int bj = B.block_col[s];
@@ -171,7 +199,7 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
     for (int c = 0; c < n; ++c)
       for (int r = c + 1; r < n; ++r)
         if (std::abs(W(r, c) - W(c, r)) > limit) return nullptr;
-    return std::make_unique<DenseReduced>(std::move(W));
+    return system;
   }
   const auto& B = std::get<BlockSparseMatrix>(p.W);
   std::vector<Eigen::Triplet<double>> triplets;
