@@ -1,10 +1,11 @@
 #include "lcp_contact_solver/ros/solver_params_ros.h"
 
-#include <cerrno>
-#include <climits>
+#include "lcp_contact_solver/core/solver_param_table.h"
+
+#include <boost/any.hpp>
+
 #include <cmath>
 #include <cstdlib>
-#include <functional>
 
 namespace lcp_contact_solver_ros {
 
@@ -32,57 +33,6 @@ std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* va
   return "";
 }
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
-  return out;
-}
-
-const std::string& solverChoices() {
-  static const std::string choices = joined(lcs::solverNames());
-  return choices;
-}
-
-const std::string& frictionModelChoices() {
-  static const std::string choices = joined(lcs::frictionModelNames());
-  return choices;
-}
-
-const char* kStoppingRuleChoices = "residual, sofa";
-const char* kConstraintLevelChoices = "position, velocity";
-
-std::string readConstraintLevel(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
-  std::string name = lcs::constraintLevelName(params->constraint_level);
-  std::string error = readParam(pnh, "constraint_level", &name);
-  if (error.empty() && !lcs::parseConstraintLevel(name, &params->constraint_level))
-    error = "parameter constraint_level: unknown level '" + name + "' (one of " + kConstraintLevelChoices + ")";
-  return error;
-}
-
-std::string readSolverKind(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
-  std::string name = lcs::solverName(params->solver);
-  std::string error = readParam(pnh, "solver", &name);
-  if (error.empty() && !lcs::parseSolverName(name, &params->solver))
-    error = "parameter solver: unknown solver '" + name + "' (one of " + solverChoices() + ")";
-  return error;
-}
-
-std::string readStoppingRule(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
-  std::string name = lcs::stoppingRuleName(params->stopping_rule);
-  std::string error = readParam(pnh, "stopping_rule", &name);
-  if (error.empty() && !lcs::parseStoppingRule(name, &params->stopping_rule))
-    error = "parameter stopping_rule: unknown rule '" + name + "' (one of " + kStoppingRuleChoices + ")";
-  return error;
-}
-
-std::string readFrictionModel(const ros::NodeHandle& pnh, lcs::SolverParams* params) {
-  std::string name = lcs::frictionModelName(params->friction_model);
-  std::string error = readParam(pnh, "friction_model", &name);
-  if (error.empty() && !lcs::parseFrictionModel(name, &params->friction_model))
-    error = "parameter friction_model: unknown model '" + name + "' (one of " + frictionModelChoices() + ")";
-  return error;
-}
-
 std::string readTranslation(const ros::NodeHandle& pnh, std::array<double, 3>* translation) {
   std::vector<double> xyz(translation->begin(), translation->end());
   std::string error = readParam(pnh, "showTranslation", &xyz);
@@ -91,21 +41,39 @@ std::string readTranslation(const ros::NodeHandle& pnh, std::array<double, 3>* t
   return error;
 }
 
+// Every parameter of the table present in `pnh`, read with its own type and set through
+// the table's parser (numbers as their exact text, so nothing is rounded).
 std::string readSolverParams(const ros::NodeHandle& pnh, lcs::SolverParams* p) {
-  for (const std::string& error : {
-           readParam(pnh, "tolerance", &p->tolerance), readParam(pnh, "maxIt", &p->maxIt),
-           readParam(pnh, "mu", &p->mu), readParam(pnh, "initial_guess", &p->initial_guess),
-           readParam(pnh, "build_lcp", &p->build_lcp),
-           readParam(pnh, "regularizationTerm", &p->regularizationTerm), readParam(pnh, "minW", &p->minW),
-           readParam(pnh, "maxF", &p->maxF),
-           readParam(pnh, "computeConstraintForces", &p->computeConstraintForces),
-           readParam(pnh, "displayDebug", &p->displayDebug), readParam(pnh, "max_rows", &p->max_rows),
-           readParam(pnh, "sor", &p->sor), readParam(pnh, "time_budget", &p->time_budget),
-           readParam(pnh, "erp", &p->erp), readParam(pnh, "softness", &p->softness),
-           readParam(pnh, "time_step", &p->time_step), readConstraintLevel(pnh, p),
-           readParam(pnh, "islands", &p->islands), readParam(pnh, "threads", &p->threads),
-           readSolverKind(pnh, p), readStoppingRule(pnh, p), readFrictionModel(pnh, p)}) {
-    if (!error.empty()) return error;
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    if (!pnh.hasParam(spec.name)) continue;
+    std::string text;
+    bool read = false;
+    switch (spec.type) {
+      case lcs::ParamType::kDouble: {
+        double v = 0.0;
+        read = pnh.getParam(spec.name, v);
+        text = lcs::exactDoubleText(v);
+        break;
+      }
+      case lcs::ParamType::kInt: {
+        int v = 0;
+        read = pnh.getParam(spec.name, v);
+        text = std::to_string(v);
+        break;
+      }
+      case lcs::ParamType::kBool: {
+        bool v = false;
+        read = pnh.getParam(spec.name, v);
+        text = v ? "true" : "false";
+        break;
+      }
+      case lcs::ParamType::kEnum:
+        read = pnh.getParam(spec.name, text);
+        break;
+    }
+    if (!read) return "parameter " + pnh.resolveName(spec.name) + " must be " + lcs::expectedValue(spec);
+    if (const std::string why = lcs::setParam(p, spec.name, text); !why.empty())
+      return "parameter " + pnh.resolveName(spec.name) + ": " + why;
   }
   return "";
 }
@@ -134,81 +102,13 @@ std::string validateDisplay(const DisplayOptions& d) {
   return "";
 }
 
-bool parseDouble(const std::string& text, double* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text.c_str(), &end);
-  if (*end != '\0' || errno == ERANGE) return false;
-  *value = v;
-  return true;
-}
-
-bool parseInt(const std::string& text, int* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (*end != '\0' || errno == ERANGE || v < INT_MIN || v > INT_MAX) return false;
-  *value = static_cast<int>(v);
-  return true;
-}
-
-bool parseBool(const std::string& text, bool* value) {
-  if (text == "true" || text == "1") {
-    *value = true;
-  } else if (text == "false" || text == "0") {
-    *value = false;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-struct OverrideField {
-  const char* name;
-  std::string expected;
-  std::function<bool(const std::string&, lcs::SolverParams*)> parse;
-};
-
-const std::vector<OverrideField>& overrideFields() {
-  static const std::vector<OverrideField> fields = {
-      {"tolerance", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->tolerance); }},
-      {"maxIt", "an integer", [](const std::string& v, lcs::SolverParams* p) { return parseInt(v, &p->maxIt); }},
-      {"mu", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->mu); }},
-      {"build_lcp", "true or false", [](const std::string& v, lcs::SolverParams* p) { return parseBool(v, &p->build_lcp); }},
-      {"regularizationTerm", "a number",
-       [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->regularizationTerm); }},
-      {"minW", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->minW); }},
-      {"maxF", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->maxF); }},
-      {"displayDebug", "true or false",
-       [](const std::string& v, lcs::SolverParams* p) { return parseBool(v, &p->displayDebug); }},
-      {"max_rows", "an integer", [](const std::string& v, lcs::SolverParams* p) { return parseInt(v, &p->max_rows); }},
-      {"sor", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->sor); }},
-      {"time_budget", "a number",
-       [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->time_budget); }},
-      {"solver", "one of " + solverChoices(),
-       [](const std::string& v, lcs::SolverParams* p) { return lcs::parseSolverName(v, &p->solver); }},
-      {"stopping_rule", std::string("one of ") + kStoppingRuleChoices,
-       [](const std::string& v, lcs::SolverParams* p) { return lcs::parseStoppingRule(v, &p->stopping_rule); }},
-      {"friction_model", "one of " + frictionModelChoices(),
-       [](const std::string& v, lcs::SolverParams* p) { return lcs::parseFrictionModel(v, &p->friction_model); }},
-      {"erp", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->erp); }},
-      {"softness", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->softness); }},
-      {"time_step", "a number", [](const std::string& v, lcs::SolverParams* p) { return parseDouble(v, &p->time_step); }},
-      {"islands", "true or false", [](const std::string& v, lcs::SolverParams* p) { return parseBool(v, &p->islands); }},
-      {"threads", "an integer", [](const std::string& v, lcs::SolverParams* p) { return parseInt(v, &p->threads); }},
-      {"constraint_level", std::string("one of ") + kConstraintLevelChoices,
-       [](const std::string& v, lcs::SolverParams* p) { return lcs::parseConstraintLevel(v, &p->constraint_level); }},
-  };
-  return fields;
-}
-
 }  // namespace
 
 lcs::SolverParams defaultSolverParams() {
-  lcs::SolverParams params;  // SOFA's defaults
-  params.max_rows = 30000;
+  lcs::SolverParams params;  // SOFA's defaults, then the node's own (node_param_defaults.def)
+#define LCS_NODE_DEFAULT(name, value) lcs::setParam(&params, #name, value);
+#include "lcp_contact_solver/ros/node_param_defaults.def"
+#undef LCS_NODE_DEFAULT
   return params;
 }
 
@@ -249,59 +149,60 @@ std::string validateSettings(const NodeSettings& s) {
   return "";
 }
 
-// Spaces around the name and the value are not part of them: 'tolerance = 1e-3' is
-// what a user writes in YAML.
-std::string trimmed(const std::string& text) {
-  const char* space = " \t\r\n";
-  const std::size_t first = text.find_first_not_of(space);
-  if (first == std::string::npos) return "";
-  return text.substr(first, text.find_last_not_of(space) - first + 1);
-}
-
 std::string applyOverride(const std::string& assignment, lcs::SolverParams* params) {
-  const std::size_t eq = assignment.find('=');
-  if (eq == std::string::npos) return "override '" + assignment + "' is not of the form name=value";
-  const std::string name = trimmed(assignment.substr(0, eq)), value = trimmed(assignment.substr(eq + 1));
-  for (const OverrideField& field : overrideFields()) {
-    if (name != field.name) continue;
-    if (!field.parse(value, params)) return "override " + name + "='" + value + "' must be " + field.expected;
-    return "";
-  }
-  return "override '" + name + "' is not a solver parameter";
+  const std::string error = lcs::applyAssignment(params, assignment, lcs::kParamOverride);
+  return error.empty() ? "" : "override " + error;
 }
 
 std::vector<std::string> overridableNames() {
   std::vector<std::string> names;
-  for (const OverrideField& field : overrideFields()) names.emplace_back(field.name);
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    if (spec.access & lcs::kParamOverride) names.push_back(spec.name);
   return names;
 }
 
+namespace {
+
+using Config = lcp_contact_solver::ContactSolverConfig;
+
+template <typename T>
+void setField(Config* config, const Config::AbstractParamDescription& description, const T& value) {
+  if (const auto* typed = dynamic_cast<const Config::ParamDescription<T>*>(&description))
+    config->*(typed->field) = value;
+}
+
+// A config field's value as the table's text.
+std::string fieldText(const Config& config, const Config::AbstractParamDescription& description) {
+  boost::any value;
+  description.getValue(config, value);
+  if (const double* v = boost::any_cast<double>(&value)) return lcs::exactDoubleText(*v);
+  if (const int* v = boost::any_cast<int>(&value)) return std::to_string(*v);
+  if (const bool* v = boost::any_cast<bool>(&value)) return *v ? "true" : "false";
+  if (const std::string* v = boost::any_cast<std::string>(&value)) return *v;
+  return "";
+}
+
+}  // namespace
+
+// The table's parameters go by name through the generated descriptions; the display ones
+// are the node's own.
 lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
-  lcp_contact_solver::ContactSolverConfig c = lcp_contact_solver::ContactSolverConfig::__getDefault__();
-  c.tolerance = s.solver.tolerance;
-  c.maxIt = s.solver.maxIt;
-  c.mu = s.solver.mu;
-  c.initial_guess = s.solver.initial_guess;
-  c.build_lcp = s.solver.build_lcp;
-  c.regularizationTerm = s.solver.regularizationTerm;
-  c.minW = s.solver.minW;
-  c.maxF = s.solver.maxF;
-  c.computeConstraintForces = s.solver.computeConstraintForces;
-  c.displayDebug = s.solver.displayDebug;
+  Config c = Config::__getDefault__();
+  for (const auto& description : Config::__getParamDescriptions__()) {
+    const lcs::ParamSpec* spec = lcs::findSolverParam(description->name);
+    if (spec == nullptr) continue;
+    const std::string text = lcs::paramText(s.solver, spec->name);
+    switch (spec->type) {
+      case lcs::ParamType::kDouble: setField(&c, *description, std::strtod(text.c_str(), nullptr)); break;
+      case lcs::ParamType::kInt: setField(&c, *description, std::stoi(text)); break;
+      case lcs::ParamType::kBool: setField(&c, *description, text == "true"); break;
+      case lcs::ParamType::kEnum: setField(&c, *description, text); break;
+    }
+  }
   c.showCellWidth = s.display.showCellWidth;
   c.showTranslation_x = s.display.showTranslation[0];
   c.showTranslation_y = s.display.showTranslation[1];
   c.showTranslation_z = s.display.showTranslation[2];
-  c.solver = lcs::solverName(s.solver.solver);
-  c.stopping_rule = lcs::stoppingRuleName(s.solver.stopping_rule);
-  c.friction_model = lcs::frictionModelName(s.solver.friction_model);
-  c.sor = s.solver.sor;
-  c.time_budget = s.solver.time_budget;
-  c.max_rows = s.solver.max_rows;
-  c.erp = s.solver.erp;
-  c.softness = s.solver.softness;
-  c.time_step = s.solver.time_step;
-  c.constraint_level = lcs::constraintLevelName(s.solver.constraint_level);
   c.force_arrow_scale = s.display.force_arrow_scale;
   c.show_w_heatmap = s.display.show_w_heatmap;
   return c;
@@ -309,30 +210,12 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
 
 std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSettings* s) {
   NodeSettings next = *s;
-  if (!lcs::parseSolverName(c.solver, &next.solver.solver))
-    return "solver: unknown solver '" + c.solver + "' (one of " + solverChoices() + ")";
-  if (!lcs::parseStoppingRule(c.stopping_rule, &next.solver.stopping_rule))
-    return "stopping_rule: unknown rule '" + c.stopping_rule + "' (one of " + kStoppingRuleChoices + ")";
-  if (!lcs::parseFrictionModel(c.friction_model, &next.solver.friction_model))
-    return "friction_model: unknown model '" + c.friction_model + "' (one of " + frictionModelChoices() + ")";
-  if (!lcs::parseConstraintLevel(c.constraint_level, &next.solver.constraint_level))
-    return "constraint_level: unknown level '" + c.constraint_level + "' (one of " + kConstraintLevelChoices + ")";
-  next.solver.erp = c.erp;
-  next.solver.softness = c.softness;
-  next.solver.time_step = c.time_step;
-  next.solver.sor = c.sor;
-  next.solver.time_budget = c.time_budget;
-  next.solver.tolerance = c.tolerance;
-  next.solver.maxIt = c.maxIt;
-  next.solver.mu = c.mu;
-  next.solver.initial_guess = c.initial_guess;
-  next.solver.build_lcp = c.build_lcp;
-  next.solver.regularizationTerm = c.regularizationTerm;
-  next.solver.minW = c.minW;
-  next.solver.maxF = c.maxF;
-  next.solver.computeConstraintForces = c.computeConstraintForces;
-  next.solver.displayDebug = c.displayDebug;
-  next.solver.max_rows = c.max_rows;
+  for (const auto& description : Config::__getParamDescriptions__()) {
+    if (lcs::findSolverParam(description->name) == nullptr) continue;
+    if (const std::string error = lcs::setParam(&next.solver, description->name, fieldText(c, *description));
+        !error.empty())
+      return error;
+  }
   next.display.showCellWidth = c.showCellWidth;
   next.display.showTranslation = {{c.showTranslation_x, c.showTranslation_y, c.showTranslation_z}};
   next.display.force_arrow_scale = c.force_arrow_scale;

@@ -1,5 +1,7 @@
 #include "lcp_contact_solver/scene/scene_params.h"
 
+#include "lcp_contact_solver/core/solver_param_table.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -274,14 +276,19 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       }
     } else if (key == "solver") {
       r.map(v, key);
-      r.onlyKeys(v, key, {"name", "tolerance", "maxIt", "regularizationTerm", "build_lcp"});
-      if (v["name"] && !parseSolverName(r.string(v["name"], "solver.name"), &p.solver.solver))
-        r.fail("solver.name", "unknown solver '" + v["name"].Scalar() + "'");
-      if (v["tolerance"]) p.solver.tolerance = r.number(v["tolerance"], "solver.tolerance");
-      if (v["maxIt"]) p.solver.maxIt = r.integer(v["maxIt"], "solver.maxIt");
-      if (v["regularizationTerm"])
-        p.solver.regularizationTerm = r.number(v["regularizationTerm"], "solver.regularizationTerm");
-      if (v["build_lcp"]) p.solver.build_lcp = r.boolean(v["build_lcp"], "solver.build_lcp");
+      for (const auto& kv2 : v) {
+        // `name` is the solver's name here (the ROS parameter is `solver`).
+        const std::string k = kv2.first.Scalar(), param = k == "name" ? "solver" : k;
+        if (k == "solver" || findSolverParam(param) == nullptr) {
+          std::string list = "name";
+          for (const ParamSpec& spec : solverParamSpecs())
+            if (spec.name != "solver") list += ", " + spec.name;
+          r.fail(key + "." + k, "unknown key (known: " + list + ")");
+        }
+        if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + expectedValue(*findSolverParam(param)));
+        if (const std::string error = setParam(&p.solver, param, kv2.second.Scalar()); !error.empty())
+          r.fail(key + "." + k, error);
+      }
     }
   }
   if (std::string err = validateSceneParams(p); !err.empty()) throw SceneError(source + ": " + err);

@@ -7,6 +7,7 @@
 //     detect change), each beside an independent check of every recorded answer on its own
 //     problem (answer_check.h: residual, states, signs, friction cone).
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/core/solver_param_table.h"
 #include "lcp_contact_solver/ros/cycle_solver.h"
 #include "lcp_contact_solver/ros/replay/answer_check.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
@@ -456,7 +457,8 @@ TEST(ReplayParams, ShippedDefaultsFileIsTheNodeDefaults) {
 TEST(ReplayParams, RoundTripOverridesAndFaults) {
   lcs::SolverParams p = defaultSolverParams();
   for (const char* o : {"tolerance=1e-7", "maxIt=77", "mu=0.25", "initial_guess=false", "solver=apgd",
-                        "stopping_rule=sofa", "sor=1.2", "regularizationTerm=1e-9", "max_rows=500"})
+                        "stopping_rule=sofa", "sor=1.2", "regularizationTerm=1e-9", "max_rows=500",
+                        "erp=0.3", "constraint_level=velocity", "time_step=0.01", "islands=false", "threads=2"})
     ASSERT_EQ(applyReplayOverride(o, &p), "") << o;
   const std::string path = tmpFile("round.params.yaml");
   ASSERT_EQ(writeParamsFile(path, p), "");
@@ -471,6 +473,9 @@ TEST(ReplayParams, RoundTripOverridesAndFaults) {
   EXPECT_EQ(q.sor, 1.2);
   EXPECT_EQ(q.regularizationTerm, 1e-9);
   EXPECT_EQ(q.max_rows, 500);
+  // Every parameter of the table is written, so the file reproduces the solve exactly.
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    EXPECT_EQ(lcs::paramText(q, spec.name), lcs::paramText(p, spec.name)) << spec.name;
 
   EXPECT_NE(applyReplayOverride("initial_guess=maybe", &p), "");
   EXPECT_NE(applyReplayOverride("nosuch=1", &p), "");

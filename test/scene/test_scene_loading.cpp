@@ -144,7 +144,29 @@ TEST(SceneLoading, YamlParameters) {
   expectYamlError("compliance: sparse\n", "compliance");
   expectYamlError("friction_pairs: [[a, b]]\n", "friction_pairs[0]");
   expectYamlError("solver: {name: magic}\n", "solver.name");
+  expectYamlError("solver: {maxIt: 5.5}\n", "'solver.maxIt': maxIt='5.5' must be an integer");
+  expectYamlError("solver: {speed: 3}\n", "'solver.speed': unknown key");
+  expectYamlError("solver: {solver: pgs}\n", "'solver.solver': unknown key");  // `name` here
+  expectYamlError("solver: {sor: 2}\n", "solver: sor must be");                // validateParams
   expectYamlError("mu: [\n", "syntax");
+}
+
+// The solver: map takes every parameter of the core's table (solver_param_table.def).
+TEST(SceneLoading, SolverMapTakesEveryTableParameter) {
+  const SceneParams p = parseSceneParams(
+      "solver: {name: pgs, sor: 1.2, friction_model: pyramid4, islands: false, threads: 1, max_rows: 900,\n"
+      "         initial_guess: no, stopping_rule: sofa, time_budget: 0.5}\n",
+      "inline.yaml");
+  EXPECT_EQ(p.solver.solver, SolverKind::kPgs);
+  EXPECT_EQ(p.solver.sor, 1.2);
+  EXPECT_EQ(p.solver.friction_model, FrictionModel::kPyramid4);
+  EXPECT_FALSE(p.solver.islands);
+  EXPECT_EQ(p.solver.threads, 1);
+  EXPECT_EQ(p.solver.max_rows, 900);
+  EXPECT_FALSE(p.solver.initial_guess);
+  EXPECT_EQ(p.solver.stopping_rule, StoppingRule::kSofa);
+  EXPECT_EQ(p.solver.time_budget, 0.5);
+  EXPECT_EQ(p.solver.tolerance, SceneParams::defaultSceneSolverParams().tolerance);  // not given: the scene default
 }
 
 TEST(SceneLoading, ShippedScenesLoad) {

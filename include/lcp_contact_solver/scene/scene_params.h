@@ -125,9 +125,9 @@ struct SceneParams {
   GroundPlane ground_plane;
   std::map<std::string, JointOriginOverride> joint_origins;
   std::map<std::string, InitialVelocity> initial_velocities;
-  // Solver settings of the in-process simulator (SceneSimulator). YAML `solver:` map with
-  // keys `name`, `tolerance`, `maxIt`, `regularizationTerm`, `build_lcp` (false with
-  // `compliance: bodies`: the unbuilt solve). The ROS simulator node leaves solving to the
+  // Solver settings of the in-process simulator (SceneSimulator). YAML `solver:` map of
+  // the core's parameters (solver_param_table.def), with `name` for `solver`; e.g.
+  // `build_lcp: false` with `compliance: bodies`: the unbuilt solve. The ROS simulator node leaves solving to the
   // solver node and ignores them.
   SolverParams solver = defaultSceneSolverParams();
   // Suggested simulated time for demos (s); 0 = not given.

@@ -4,20 +4,16 @@
 
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/problem_io.h"
+#include "lcp_contact_solver/core/solver_param_table.h"
 #include "lcp_contact_solver/core/solver_params.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <cerrno>
-#include <climits>
-#include <cmath>
-#include <cstdlib>
+#include <cctype>
 #include <exception>
 #include <filesystem>
-#include <functional>
 #include <iostream>
-#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -41,80 +37,60 @@ struct LcpSolveOptions {
 };
 
 // ---- argument parsing ---------------------------------------------------------------------
+// Every solver parameter of the table (core/solver_param_table.def) is an option under its
+// own name and its kebab-case spelling (--maxIt, --max-it); booleans are flags with a
+// --no- form. --regularization is the older name of --regularization-term.
 
-bool parseFiniteDouble(const std::string& text, double* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  const double parsed = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size() || !std::isfinite(parsed)) return false;
-  *value = parsed;
-  return true;
+std::string kebab(const std::string& name) {
+  std::string out;
+  for (char c : name) {
+    if (c == '_') {
+      out += '-';
+    } else if (std::isupper(static_cast<unsigned char>(c))) {
+      out += '-';
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else {
+      out += c;
+    }
+  }
+  return out;
 }
 
-bool parseInt(const std::string& text, int* value) {
-  if (text.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  const long parsed = std::strtol(text.c_str(), &end, 10);
-  if (end != text.c_str() + text.size() || errno == ERANGE || parsed < INT_MIN || parsed > INT_MAX)
-    return false;
-  *value = static_cast<int>(parsed);
-  return true;
+// The option's spellings, table name first: "--maxIt,--max-it".
+std::vector<std::string> spellings(const ParamSpec& spec) {
+  std::vector<std::string> names = {"--" + spec.name};
+  if (kebab(spec.name) != spec.name) names.push_back("--" + kebab(spec.name));
+  if (spec.name == "regularizationTerm") names.push_back("--regularization");
+  return names;
 }
 
-// Each option that takes a value: stores it, or returns why it cannot.
-using ValueSetter = std::function<std::string(const std::string&, SolverParams*)>;
-
-ValueSetter doubleSetter(double SolverParams::*field) {
-  return [field](const std::string& text, SolverParams* params) -> std::string {
-    if (!parseFiniteDouble(text, &(params->*field))) return "expects a finite number";
-    return "";
-  };
-}
-
-const std::map<std::string, ValueSetter>& valueOptions() {
-  static const std::map<std::string, ValueSetter> options = {
-      {"--solver",
-       [](const std::string& text, SolverParams* params) -> std::string {
-         return parseSolverName(text, &params->solver) ? "" : "unknown solver";
-       }},
-      {"--tolerance", doubleSetter(&SolverParams::tolerance)},
-      {"--max-it",
-       [](const std::string& text, SolverParams* params) -> std::string {
-         return parseInt(text, &params->maxIt) ? "" : "expects an integer";
-       }},
-      {"--mu", doubleSetter(&SolverParams::mu)},
-      {"--regularization", doubleSetter(&SolverParams::regularizationTerm)},
-      {"--min-w", doubleSetter(&SolverParams::minW)},
-      {"--max-f", doubleSetter(&SolverParams::maxF)},
-      {"--sor", doubleSetter(&SolverParams::sor)},
-      {"--time-budget", doubleSetter(&SolverParams::time_budget)},
-      {"--friction-model",
-       [](const std::string& text, SolverParams* params) -> std::string {
-         return parseFrictionModel(text, &params->friction_model) ? "" : "expects disc, pyramid4 or pyramid8";
-       }},
-      {"--stopping-rule",
-       [](const std::string& text, SolverParams* params) -> std::string {
-         return parseStoppingRule(text, &params->stopping_rule) ? "" : "expects residual or sofa";
-       }},
-  };
-  return options;
+std::string joined(const std::vector<std::string>& names, const char* separator) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : separator) + name;
+  return out;
 }
 
 // Parses the arguments after the program name: empty string, or the usage error. Values
-// are taken as text by CLI11 and checked here, so a bad one is named with its option.
+// are taken as text by CLI11 and set through the table's parsers, so a bad one is named
+// with its option.
 std::string parseArgs(const std::vector<std::string>& args, LcpSolveOptions* options) {
   CLI::App app(kProgram);
   app.set_help_flag();  // --help prints lcpSolveUsage(), not CLI11's text
   app.allow_extras();   // reported below as "unknown option"
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  std::map<std::string, std::string> values;
-  std::map<std::string, CLI::Option*> given;
-  for (const auto& entry : valueOptions()) given[entry.first] = app.add_option(entry.first, values[entry.first]);
-  bool no_initial_guess = false;
+  const std::vector<ParamSpec>& specs = solverParamSpecs();
+  std::vector<std::string> values(specs.size());
+  std::vector<CLI::Option*> given(specs.size()), negated(specs.size(), nullptr);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const std::string names = joined(spellings(specs[i]), ",");
+    if (specs[i].type == ParamType::kBool) {
+      given[i] = app.add_flag(names);
+      negated[i] = app.add_flag("--no-" + kebab(specs[i].name));
+    } else {
+      given[i] = app.add_option(names, values[i]);
+    }
+  }
   app.add_flag("--json", options->json);
-  app.add_flag("--no-initial-guess", no_initial_guess);
-  app.add_flag("--display-debug", options->params.displayDebug);
   app.add_flag("--fail-unconverged", options->fail_unconverged);
   app.add_flag("-h,--help", options->help);
   app.add_option("files", options->files);  // also everything after "--"
@@ -128,11 +104,13 @@ std::string parseArgs(const std::vector<std::string>& args, LcpSolveOptions* opt
   }
   for (const std::string& extra : app.remaining())
     if (extra != "--") return "unknown option '" + extra.substr(0, extra.find('=')) + "'";
-  if (no_initial_guess) options->params.initial_guess = false;
-  for (const auto& [name, setter] : valueOptions()) {
-    if (given[name]->count() == 0) continue;
-    if (const std::string why = setter(values[name], &options->params); !why.empty())
-      return "option " + name + " " + why + ", got '" + values[name] + "'";
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    std::string text;
+    if (given[i]->count() > 0) text = specs[i].type == ParamType::kBool ? "true" : values[i];
+    if (negated[i] != nullptr && negated[i]->count() > 0) text = "false";
+    if (given[i]->count() == 0 && (negated[i] == nullptr || negated[i]->count() == 0)) continue;
+    if (const std::string why = setParam(&options->params, specs[i].name, text); !why.empty())
+      return "option " + spellings(specs[i]).back() + ": " + why;
   }
   if (options->help) return "";
   if (const std::string why = validateParams(options->params); !why.empty()) return why;
@@ -141,38 +119,28 @@ std::string parseArgs(const std::vector<std::string>& args, LcpSolveOptions* opt
 }
 
 std::string lcpSolveUsage() {
-  std::string solvers;
-  for (const std::string& name : solverNames()) solvers += (solvers.empty() ? "" : ", ") + name;
-  std::string models;
-  for (const std::string& name : frictionModelNames()) models += (models.empty() ? "" : ", ") + name;
-  const SolverParams defaults;
   std::ostringstream usage;
   usage << "usage: " << kProgram << " FILE... [options]\n"
         << "Reads contact problems (Siconos .dat LCP/FC3D, FCLIB .hdf5) and solves each one.\n"
         << "\n"
-        << "options:\n"
-        << "  --solver NAME          " << solvers << " (default " << solverName(defaults.solver) << ")\n"
-        << "  --tolerance X          convergence threshold (default " << defaults.tolerance << ")\n"
-        << "  --max-it N             maximum sweeps, iterations or pivots (default " << defaults.maxIt << ")\n"
-        << "  --mu X                 friction for contacts that give none; problem files give\n"
-        << "                         their own (default " << defaults.mu << ")\n"
-        << "  --regularization X     add X to W's diagonal (default 0)\n"
-        << "  --min-w X              ignore contacts with normal compliance <= X (default 0: off)\n"
-        << "  --max-f X              drop contacts whose force exceeds X and re-solve (0: off)\n"
-        << "  --sor X                over-relaxation of pgs/nlgs, in (0, 2) (default " << defaults.sor << ")\n"
-        << "  --time-budget S        stop each solve after S seconds with its best iterate,\n"
-        << "                         status time_budget (default 0: no budget)\n"
-        << "  --friction-model M     " << models << " (default "
-        << frictionModelName(defaults.friction_model) << "); pgs and\n"
-        << "                         lemke solve a pyramid as an LCP; the residual column\n"
-        << "                         stays the disc's (nonzero by design), --json adds\n"
-        << "                         solver_error (the pyramid's own) and friction_model\n"
-        << "  --stopping-rule RULE   residual or sofa (default "
-        << stoppingRuleName(defaults.stopping_rule) << ")\n"
-        << "  --no-initial-guess     no warm start (each file is solved cold anyway)\n"
-        << "  --display-debug        print each problem's residual history on stderr\n"
+        << "solver parameters (the node's names, README \"Parameters\"; problem files give their\n"
+        << "own mu per contact, mu is for those that give none; --display-debug prints each\n"
+        << "problem's residual history on stderr):\n";
+  for (const ParamSpec& spec : solverParamSpecs()) {
+    std::string names = joined(spellings(spec), ", ");
+    if (spec.type == ParamType::kBool) {
+      names += ", --no-" + kebab(spec.name);
+    } else {
+      names += spec.type == ParamType::kEnum ? " NAME" : spec.type == ParamType::kInt ? " N" : " X";
+    }
+    usage << "  " << names << "\n      " << spec.doc << "; default " << spec.default_text << "\n";
+  }
+  usage << "\n"
+        << "output:\n"
         << "  --json                 one JSON object per line: the table's fields plus forces,\n"
-        << "                         d = W forces + d_free, states\n"
+        << "                         d = W forces + d_free, states; with a pyramid\n"
+        << "                         friction_model also solver_error (the pyramid's own\n"
+        << "                         residual; the residual column stays the disc's)\n"
         << "  --fail-unconverged     exit 1 if some problem did not converge\n"
         << "  --help                 this text\n"
         << "\n"

@@ -1,0 +1,266 @@
+// The solver parameter table (core/solver_param_table.def) against everything that names
+// the parameters: SolverParams' defaults, the core's enum names, config/default.yaml, the
+// generated dynamic_reconfigure config (from cfg/ContactSolver.cfg), the service
+// overrides and the README's Parameters section.
+#include "lcp_contact_solver/core/solver_param_table.h"
+#include "lcp_contact_solver/ros/replay/params_file.h"
+#include "lcp_contact_solver/ros/solver_params_ros.h"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <boost/any.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace lcs = ::lcp_contact_solver;
+using lcp_contact_solver_ros::defaultSolverParams;
+
+namespace {
+
+using Config = lcp_contact_solver::ContactSolverConfig;
+
+// The display parameters: the node's own, not the solver table's.
+const std::set<std::string> kDisplayConfigNames = {"showCellWidth", "showTranslation_x", "showTranslation_y",
+                                                   "showTranslation_z", "force_arrow_scale", "show_w_heatmap"};
+
+double configNumber(const Config& config, const std::string& name) {
+  for (const auto& description : Config::__getParamDescriptions__()) {
+    if (description->name != name) continue;
+    boost::any value;
+    description->getValue(config, value);
+    if (const double* v = boost::any_cast<double>(&value)) return *v;
+    if (const int* v = boost::any_cast<int>(&value)) return *v;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+std::string configText(const Config& config, const std::string& name) {
+  for (const auto& description : Config::__getParamDescriptions__()) {
+    if (description->name != name) continue;
+    boost::any value;
+    description->getValue(config, value);
+    if (const double* v = boost::any_cast<double>(&value)) return lcs::exactDoubleText(*v);
+    if (const int* v = boost::any_cast<int>(&value)) return std::to_string(*v);
+    if (const bool* v = boost::any_cast<bool>(&value)) return *v ? "true" : "false";
+    if (const std::string* v = boost::any_cast<std::string>(&value)) return *v;
+  }
+  return "<missing>";
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+TEST(ParamTable, DefaultsAreSolverParamsDefaults) {
+  const lcs::SolverParams defaults;
+  ASSERT_FALSE(lcs::solverParamSpecs().empty());
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    EXPECT_EQ(lcs::paramText(defaults, spec.name), spec.default_text) << spec.name;
+}
+
+TEST(ParamTable, EnumChoicesAreTheCoresNames) {
+  EXPECT_EQ(lcs::findSolverParam("solver")->choices, lcs::solverNames());
+  EXPECT_EQ(lcs::findSolverParam("friction_model")->choices, lcs::frictionModelNames());
+  EXPECT_EQ(lcs::findSolverParam("stopping_rule")->choices, (std::vector<std::string>{"residual", "sofa"}));
+  EXPECT_EQ(lcs::findSolverParam("constraint_level")->choices, (std::vector<std::string>{"position", "velocity"}));
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    if (spec.type != lcs::ParamType::kEnum) continue;
+    for (const std::string& choice : spec.choices) {
+      lcs::SolverParams p;
+      EXPECT_EQ(lcs::setParam(&p, spec.name, choice), "") << spec.name;
+      EXPECT_EQ(lcs::paramText(p, spec.name), choice);
+    }
+  }
+}
+
+TEST(ParamTable, EveryParameterRoundTripsThroughText) {
+  lcs::SolverParams p;
+  for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
+                        "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
+                        "displayDebug=true", "solver=prox", "friction_model=pyramid8", "sor=1.3",
+                        "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
+                        "constraint_level=velocity", "time_step=0.01", "max_rows=12", "islands=false",
+                        "threads=3"})
+    ASSERT_EQ(lcs::applyAssignment(&p, a), "") << a;
+  // Every parameter was changed from its default, so the list above is the whole table.
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    EXPECT_NE(lcs::paramText(p, spec.name), spec.default_text) << spec.name << " not covered";
+    lcs::SolverParams q;
+    ASSERT_EQ(lcs::setParam(&q, spec.name, lcs::paramText(p, spec.name)), "") << spec.name;
+    EXPECT_EQ(lcs::paramText(q, spec.name), lcs::paramText(p, spec.name));
+  }
+  EXPECT_EQ(p.regularizationTerm, 3e-9);
+  EXPECT_EQ(p.threads, 3);
+  for (double v : {0.1, 1.0 / 3.0, 1e-300, 6.02214076e23, -2.5})
+    EXPECT_EQ(std::strtod(lcs::exactDoubleText(v).c_str(), nullptr), v);
+}
+
+TEST(ParamTable, OneParserPerTypeRefusesWithTheExpectation) {
+  lcs::SolverParams p;
+  EXPECT_EQ(lcs::setParam(&p, "tolerance", "nan"), "tolerance='nan' must be a finite number");
+  EXPECT_NE(lcs::setParam(&p, "mu", "inf"), "");
+  EXPECT_NE(lcs::setParam(&p, "mu", "1e400"), "");
+  EXPECT_NE(lcs::setParam(&p, "mu", " 1"), "");
+  EXPECT_NE(lcs::setParam(&p, "mu", ""), "");
+  EXPECT_EQ(lcs::setParam(&p, "maxIt", "5.5"), "maxIt='5.5' must be an integer");
+  EXPECT_NE(lcs::setParam(&p, "maxIt", "99999999999"), "");
+  EXPECT_EQ(lcs::setParam(&p, "islands", "maybe"), "islands='maybe' must be true or false");
+  EXPECT_EQ(lcs::setParam(&p, "solver", "fast"), "solver='fast' must be one of auto, pgs, nlgs, lemke, apgd, newton, prox");
+  EXPECT_EQ(lcs::setParam(&p, "speed", "3"), "'speed' is not a solver parameter");
+  EXPECT_EQ(lcs::applyAssignment(&p, "tolerance"), "'tolerance' is not of the form name=value");
+  EXPECT_EQ(lcs::applyAssignment(&p, "initial_guess=false", lcs::kParamOverride),
+            "'initial_guess' is not a solver parameter");
+  const lcs::SolverParams defaults;
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())  // refusals changed nothing
+    EXPECT_EQ(lcs::paramText(p, spec.name), spec.default_text) << spec.name;
+  for (const char* yes : {"true", "1", "yes", "On", "TRUE"}) {
+    p.islands = false;
+    EXPECT_EQ(lcs::setParam(&p, "islands", yes), "");
+    EXPECT_TRUE(p.islands) << yes;
+  }
+  EXPECT_EQ(lcs::setParam(&p, "islands", "off"), "");
+  EXPECT_FALSE(p.islands);
+  // Ranges are dynamic_reconfigure's; what a value must be is validateParams' (a start-up
+  // tolerance of 1e-300, below the slider's 1e-16, is a test's way to never converge).
+  EXPECT_EQ(lcs::setParam(&p, "tolerance", "1e-300"), "");
+  EXPECT_EQ(p.tolerance, 1e-300);
+}
+
+TEST(ParamTable, ShippedDefaultYamlHoldsEveryParameterAtTheNodeDefault) {
+  const std::string path = LCS_CONFIG_DIR "/default.yaml";
+  lcs::SolverParams loaded = defaultSolverParams();
+  ASSERT_EQ(lcp_contact_solver_ros::loadParamsFile(path, &loaded), "");  // every key known
+  const YAML::Node root = YAML::LoadFile(path);
+  const lcs::SolverParams node = defaultSolverParams();
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    ASSERT_TRUE(root[spec.name]) << spec.name << " missing from default.yaml";
+    lcs::SolverParams p;
+    ASSERT_EQ(lcs::setParam(&p, spec.name, root[spec.name].Scalar()), "");
+    EXPECT_EQ(lcs::paramText(p, spec.name), lcs::paramText(node, spec.name)) << spec.name;
+  }
+  EXPECT_EQ(node.max_rows, 30000);  // node_param_defaults.def
+}
+
+TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
+  const Config& lo = Config::__getMin__();
+  const Config& hi = Config::__getMax__();
+  const Config& def = Config::__getDefault__();
+  const lcs::SolverParams node = defaultSolverParams();
+  std::set<std::string> in_config;
+  for (const auto& description : Config::__getParamDescriptions__()) {
+    in_config.insert(description->name);
+    const lcs::ParamSpec* spec = lcs::findSolverParam(description->name);
+    if (spec == nullptr) {
+      EXPECT_EQ(kDisplayConfigNames.count(description->name), 1u) << description->name << " is in no table";
+      continue;
+    }
+    EXPECT_TRUE(spec->access & lcs::kParamReconfigure) << spec->name;
+    EXPECT_EQ(description->description, spec->doc) << spec->name;
+    EXPECT_EQ(configText(def, spec->name), lcs::paramText(node, spec->name)) << spec->name;
+    if (spec->type == lcs::ParamType::kDouble || spec->type == lcs::ParamType::kInt) {
+      EXPECT_EQ(configNumber(lo, spec->name), spec->min) << spec->name;
+      EXPECT_EQ(configNumber(hi, spec->name), spec->max) << spec->name;
+    }
+    if (spec->type == lcs::ParamType::kEnum) {
+      for (const std::string& choice : spec->choices)
+        EXPECT_NE(description->edit_method.find("'value': '" + choice + "'"), std::string::npos) << choice;
+    }
+  }
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::kParamReconfigure) ? 1u : 0u) << spec.name;
+}
+
+TEST(ParamTable, ConfigRoundTripCarriesEveryReconfigurableParameter) {
+  lcp_contact_solver_ros::NodeSettings s;
+  for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
+                        "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
+                        "displayDebug=true", "solver=prox", "friction_model=pyramid8", "sor=1.3",
+                        "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
+                        "constraint_level=velocity", "time_step=0.01", "max_rows=12"})
+    ASSERT_EQ(lcs::applyAssignment(&s.solver, a), "") << a;
+  lcp_contact_solver_ros::NodeSettings t;
+  ASSERT_EQ(lcp_contact_solver_ros::fromConfig(lcp_contact_solver_ros::toConfig(s), &t), "");
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    EXPECT_EQ(lcs::paramText(t.solver, spec.name), lcs::paramText(s.solver, spec.name)) << spec.name;
+}
+
+TEST(ParamTable, ServiceOverridesAreTheTablesOverrideColumn) {
+  std::set<std::string> expected;
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
+    if (spec.access & lcs::kParamOverride) expected.insert(spec.name);
+  const std::vector<std::string> names = lcp_contact_solver_ros::overridableNames();
+  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()), expected);
+  lcs::SolverParams p = defaultSolverParams();
+  EXPECT_NE(lcp_contact_solver_ros::applyOverride("initial_guess=false", &p).find("not a solver parameter"),
+            std::string::npos);
+  EXPECT_EQ(lcp_contact_solver_ros::applyOverride("threads = 2", &p), "");
+  EXPECT_EQ(p.threads, 2);
+}
+
+// README, "ROS API: contact_solver_node" → "Parameters": one row per parameter with the
+// table's type, the node's default and the runtime column; the service paragraph lists
+// the override column.
+TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
+  const std::string readme = readText(LCS_SOURCE_DIR "/README.md");
+  const std::size_t api = readme.find("## ROS API: `contact_solver_node`");
+  ASSERT_NE(api, std::string::npos);
+  const std::size_t section = readme.find("### Parameters", api);
+  const std::size_t end = readme.find("\n### ", section + 1);
+  ASSERT_NE(section, std::string::npos);
+  std::map<std::string, std::vector<std::string>> rows;  // name → cells
+  std::istringstream lines(readme.substr(section, end - section));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("| `", 0) != 0) continue;
+    std::vector<std::string> cells;
+    std::size_t from = 1;
+    for (std::size_t bar; (bar = line.find(" |", from)) != std::string::npos; from = bar + 2)
+      cells.push_back(line.substr(from + 1, bar - from - 1));
+    const std::string name = cells[0].substr(1, cells[0].find('`', 1) - 1);
+    rows[name] = cells;
+  }
+  const lcs::SolverParams node = defaultSolverParams();
+  const std::map<lcs::ParamType, std::string> types = {{lcs::ParamType::kDouble, "double"},
+                                                       {lcs::ParamType::kInt, "int"},
+                                                       {lcs::ParamType::kBool, "bool"},
+                                                       {lcs::ParamType::kEnum, "string"}};
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    ASSERT_EQ(rows.count(spec.name), 1u) << spec.name << " has no README row";
+    const std::vector<std::string>& cells = rows[spec.name];
+    ASSERT_GE(cells.size(), 6u) << spec.name;
+    EXPECT_EQ(cells[1], types.at(spec.type)) << spec.name;
+    const std::string shown = cells[2].substr(0, cells[2].find(' '));
+    const std::string value = lcs::paramText(node, spec.name);
+    if (spec.type == lcs::ParamType::kDouble || spec.type == lcs::ParamType::kInt) {
+      EXPECT_EQ(std::strtod(shown.c_str(), nullptr), std::strtod(value.c_str(), nullptr)) << spec.name;
+    } else {
+      EXPECT_EQ(shown, value) << spec.name;
+    }
+    const std::string runtime = (spec.access & lcs::kParamReconfigure) ? "yes"
+                                : (spec.access & lcs::kParamOverride) ? "no (service: yes)"
+                                                                       : "no";
+    EXPECT_EQ(cells[4], runtime) << spec.name;
+    for (const std::string& choice : spec.choices)
+      EXPECT_NE(cells[5].find("`" + choice + "`"), std::string::npos) << spec.name << ": " << choice;
+  }
+  // The service paragraph: "`param_overrides` changes ... each as `name=value`: `a`, `b`, ... (e.g."
+  const std::string intro = "each as\n`name=value`:";
+  const std::size_t list = readme.find(intro, api);
+  ASSERT_NE(list, std::string::npos);
+  const std::string text = readme.substr(list + intro.size(), readme.find("(e.g.", list) - list - intro.size());
+  std::set<std::string> listed;
+  for (std::size_t a = text.find('`'); a != std::string::npos; a = text.find('`', text.find('`', a + 1) + 1))
+    listed.insert(text.substr(a + 1, text.find('`', a + 1) - a - 1));
+  const std::vector<std::string> names = lcp_contact_solver_ros::overridableNames();
+  EXPECT_EQ(listed, std::set<std::string>(names.begin(), names.end()));
+}
