@@ -33,11 +33,19 @@ std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* va
   return "";
 }
 
-std::string readTranslation(const ros::NodeHandle& pnh, std::array<double, 3>* translation) {
-  std::vector<double> xyz(translation->begin(), translation->end());
-  std::string error = readParam(pnh, "showTranslation", &xyz);
-  if (error.empty() && xyz.size() != 3) error = "parameter showTranslation must hold 3 numbers [x, y, z]";
-  if (error.empty()) std::copy(xyz.begin(), xyz.end(), translation->begin());
+std::string readVec3(const ros::NodeHandle& pnh, const std::string& name, std::array<double, 3>* xyz) {
+  std::vector<double> values(xyz->begin(), xyz->end());
+  std::string error = readParam(pnh, name, &values);
+  if (error.empty() && values.size() != 3) error = "parameter " + name + " must hold 3 numbers [x, y, z]";
+  if (error.empty()) std::copy(values.begin(), values.end(), xyz->begin());
+  return error;
+}
+
+std::string readEnum(const ros::NodeHandle& pnh, const std::string& name, OverloadPolicy* policy) {
+  std::string text = overloadPolicyName(*policy);
+  std::string error = readParam(pnh, name, &text);
+  if (error.empty() && !parseOverloadPolicy(text, policy))
+    error = "parameter " + name + ": unknown policy '" + text + "' (one of drop_oldest, queue)";
   return error;
 }
 
@@ -78,17 +86,6 @@ std::string readSolverParams(const ros::NodeHandle& pnh, lcs::SolverParams* p) {
   return "";
 }
 
-std::string readDisplayOptions(const ros::NodeHandle& pnh, DisplayOptions* d) {
-  for (const std::string& error : {
-           readParam(pnh, "force_arrow_scale", &d->force_arrow_scale),
-           readParam(pnh, "show_w_heatmap", &d->show_w_heatmap), readParam(pnh, "showCellWidth", &d->showCellWidth),
-           readTranslation(pnh, &d->showTranslation), readParam(pnh, "heatmap_max_rows", &d->heatmap_max_rows),
-           readParam(pnh, "cone_height", &d->cone_height), readParam(pnh, "marker_lifetime", &d->marker_lifetime)}) {
-    if (!error.empty()) return error;
-  }
-  return "";
-}
-
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
 std::string validateDisplay(const DisplayOptions& d) {
@@ -112,27 +109,30 @@ lcs::SolverParams defaultSolverParams() {
   return params;
 }
 
-namespace {
 
-std::string readOverloadPolicy(const ros::NodeHandle& pnh, OverloadPolicy* policy) {
-  std::string name = overloadPolicyName(*policy);
-  std::string error = readParam(pnh, "overload", &name);
-  if (error.empty() && !parseOverloadPolicy(name, policy))
-    error = "parameter overload: unknown policy '" + name + "' (one of drop_oldest, queue)";
-  return error;
-}
-
-}  // namespace
-
-std::string loadSettings(const ros::NodeHandle& pnh, NodeSettings* s) {
+// The node's own parameters (node_param_table.def), each with its type.
+std::string readNodeParams(const ros::NodeHandle& pnh, NodeSettings* s) {
   for (const std::string& error : {
-           readSolverParams(pnh, &s->solver), readDisplayOptions(pnh, &s->display),
-           readParam(pnh, "pairing_window", &s->pairing_window), readParam(pnh, "queue_size", &s->queue_size),
-           readOverloadPolicy(pnh, &s->overload),
-           readParam(pnh, "diagnostics_min_rate", &s->diagnostics_min_rate),
-           readParam(pnh, "diagnostics_max_rate", &s->diagnostics_max_rate)}) {
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) readParam(pnh, #name, &s->member),
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) readParam(pnh, #name, &s->member),
+#define LCS_NODE_BOOL(name, member, def, group, doc) readParam(pnh, #name, &s->member),
+#define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) readVec3(pnh, #name, &s->member),
+#define LCS_NODE_ENUM(name, member, def, group, doc) readEnum(pnh, #name, &s->member),
+#include "lcp_contact_solver/ros/node_param_table.def"
+#undef LCS_NODE_DOUBLE
+#undef LCS_NODE_INT
+#undef LCS_NODE_BOOL
+#undef LCS_NODE_VEC3
+#undef LCS_NODE_ENUM
+       }) {
     if (!error.empty()) return error;
   }
+  return "";
+}
+
+std::string loadSettings(const ros::NodeHandle& pnh, NodeSettings* s) {
+  for (const std::string& error : {readSolverParams(pnh, &s->solver), readNodeParams(pnh, s)})
+    if (!error.empty()) return error;
   return validateSettings(*s);
 }
 
@@ -184,8 +184,13 @@ std::string fieldText(const Config& config, const Config::AbstractParamDescripti
 
 }  // namespace
 
-// The table's parameters go by name through the generated descriptions; the display ones
-// are the node's own.
+// The node table's groups: SOFA and NODE are in the dynamic_reconfigure config, STARTUP not.
+#define LCS_IN_CONFIG_SOFA(...) __VA_ARGS__
+#define LCS_IN_CONFIG_NODE(...) __VA_ARGS__
+#define LCS_IN_CONFIG_STARTUP(...)
+
+// The solver table's parameters go by name through the generated descriptions, the node
+// table's reconfigurable ones by their config fields.
 lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
   Config c = Config::__getDefault__();
   for (const auto& description : Config::__getParamDescriptions__()) {
@@ -199,12 +204,22 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
       case lcs::ParamType::kEnum: setField(&c, *description, text); break;
     }
   }
-  c.showCellWidth = s.display.showCellWidth;
-  c.showTranslation_x = s.display.showTranslation[0];
-  c.showTranslation_y = s.display.showTranslation[1];
-  c.showTranslation_z = s.display.showTranslation[2];
-  c.force_arrow_scale = s.display.force_arrow_scale;
-  c.show_w_heatmap = s.display.show_w_heatmap;
+  // The node's reconfigurable ones (node_param_table.def).
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_BOOL(name, member, def, group, doc) \
+  LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(c.name##_x = s.member[0], c.name##_y = s.member[1], c.name##_z = s.member[2];)
+#define LCS_NODE_ENUM(name, member, def, group, doc)
+#include "lcp_contact_solver/ros/node_param_table.def"
+#undef LCS_NODE_DOUBLE
+#undef LCS_NODE_INT
+#undef LCS_NODE_BOOL
+#undef LCS_NODE_VEC3
+#undef LCS_NODE_ENUM
   return c;
 }
 
@@ -216,10 +231,21 @@ std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSet
         !error.empty())
       return error;
   }
-  next.display.showCellWidth = c.showCellWidth;
-  next.display.showTranslation = {{c.showTranslation_x, c.showTranslation_y, c.showTranslation_z}};
-  next.display.force_arrow_scale = c.force_arrow_scale;
-  next.display.show_w_heatmap = c.show_w_heatmap;
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_BOOL(name, member, def, group, doc) \
+  LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
+  LCS_IN_CONFIG_##group(next.member = {{c.name##_x, c.name##_y, c.name##_z}};)
+#define LCS_NODE_ENUM(name, member, def, group, doc)
+#include "lcp_contact_solver/ros/node_param_table.def"
+#undef LCS_NODE_DOUBLE
+#undef LCS_NODE_INT
+#undef LCS_NODE_BOOL
+#undef LCS_NODE_VEC3
+#undef LCS_NODE_ENUM
   const std::string error = validateSettings(next);
   if (error.empty()) *s = next;
   return error;

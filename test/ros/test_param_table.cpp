@@ -1,7 +1,7 @@
-// The solver parameter table (core/solver_param_table.def) against everything that names
-// the parameters: SolverParams' defaults, the core's enum names, config/default.yaml, the
-// generated dynamic_reconfigure config (from cfg/ContactSolver.cfg), the service
-// overrides and the README's Parameters section.
+// The parameter tables (core/solver_param_table.def, ros/node_param_table.def) against
+// everything that names the parameters: SolverParams' and NodeSettings' defaults, the core's
+// enum names, config/default.yaml, the generated dynamic_reconfigure config (from
+// cfg/ContactSolver.cfg), the service overrides and the README's Parameters section.
 #include "lcp_contact_solver/core/solver_param_table.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "lcp_contact_solver/ros/solver_params_ros.h"
@@ -25,9 +25,51 @@ namespace {
 
 using Config = lcp_contact_solver::ContactSolverConfig;
 
-// The display parameters: the node's own, not the solver table's.
-const std::set<std::string> kDisplayConfigNames = {"showCellWidth", "showTranslation_x", "showTranslation_y",
-                                                   "showTranslation_z", "force_arrow_scale", "show_w_heatmap"};
+// The node's own table (ros/node_param_table.def), as data for the checks below.
+struct NodeSpec {
+  std::string name, type;  // type: double, int, bool, vec3, enum
+  bool in_config;           // group SOFA or NODE
+  double def = 0.0, min = 0.0, max = 0.0;
+  std::string def_text, doc;
+  std::string value;  // NodeSettings{}'s value as text (vec3: its x)
+};
+
+std::string numberText(double v) { return lcs::exactDoubleText(v); }
+
+std::string axisDoc(std::string doc, char axis) { return doc.replace(doc.find("AXIS"), 4, std::string(1, axis)); }
+
+std::vector<NodeSpec> nodeSpecs() {
+  const lcp_contact_solver_ros::NodeSettings s;
+  constexpr bool SOFA = true, NODE = true, STARTUP = false;
+  std::vector<NodeSpec> specs;
+#define LCS_NODE_DOUBLE(name, member, d, lo, hi, group, doc) \
+  specs.push_back({#name, "double", group, d, lo, hi, numberText(d), doc, numberText(s.member)});
+#define LCS_NODE_INT(name, member, d, lo, hi, group, doc) \
+  specs.push_back({#name, "int", group, d, lo, hi, std::to_string(d), doc, std::to_string(s.member)});
+#define LCS_NODE_BOOL(name, member, d, group, doc) \
+  specs.push_back({#name, "bool", group, 0.0, 0.0, 0.0, d ? "true" : "false", doc, s.member ? "true" : "false"});
+#define LCS_NODE_VEC3(name, member, d, lo, hi, group, doc)                                               \
+  for (int i = 0; i < 3; ++i)                                                                           \
+    specs.push_back({std::string(#name) + "_" + "xyz"[i], "vec3", group, d, lo, hi, numberText(d),      \
+                     axisDoc(doc, "xyz"[i]), numberText(s.member[i])});
+#define LCS_NODE_ENUM(name, member, d, group, doc) \
+  specs.push_back({#name, "enum", group, 0.0, 0.0, 0.0, d, doc, lcp_contact_solver_ros::overloadPolicyName(s.member)});
+#include "lcp_contact_solver/ros/node_param_table.def"
+#undef LCS_NODE_DOUBLE
+#undef LCS_NODE_INT
+#undef LCS_NODE_BOOL
+#undef LCS_NODE_VEC3
+#undef LCS_NODE_ENUM
+  (void)SOFA, (void)NODE, (void)STARTUP;
+  return specs;
+}
+
+const NodeSpec* findNodeSpec(const std::string& name) {
+  static const std::vector<NodeSpec> specs = nodeSpecs();
+  for (const NodeSpec& spec : specs)
+    if (spec.name == name) return &spec;
+  return nullptr;
+}
 
 double configNumber(const Config& config, const std::string& name) {
   for (const auto& description : Config::__getParamDescriptions__()) {
@@ -84,7 +126,8 @@ TEST(ParamTable, EnumChoicesAreTheCoresNames) {
   }
 }
 
-TEST(ParamTable, EveryParameterRoundTripsThroughText) {
+// Every parameter away from its default (EveryParameterRoundTripsThroughText checks that).
+lcs::SolverParams changedParams() {
   lcs::SolverParams p;
   for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
                         "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
@@ -92,7 +135,12 @@ TEST(ParamTable, EveryParameterRoundTripsThroughText) {
                         "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
                         "constraint_level=velocity", "time_step=0.01", "max_rows=12", "islands=false",
                         "threads=3"})
-    ASSERT_EQ(lcs::applyAssignment(&p, a), "") << a;
+    EXPECT_EQ(lcs::applyAssignment(&p, a), "") << a;
+  return p;
+}
+
+TEST(ParamTable, EveryParameterRoundTripsThroughText) {
+  const lcs::SolverParams p = changedParams();
   // Every parameter was changed from its default, so the list above is the whole table.
   for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
     EXPECT_NE(lcs::paramText(p, spec.name), spec.default_text) << spec.name << " not covered";
@@ -150,6 +198,23 @@ TEST(ParamTable, ShippedDefaultYamlHoldsEveryParameterAtTheNodeDefault) {
     EXPECT_EQ(lcs::paramText(p, spec.name), lcs::paramText(node, spec.name)) << spec.name;
   }
   EXPECT_EQ(node.max_rows, 30000);  // node_param_defaults.def
+  for (const auto& entry : root) {  // every key is in one of the two tables
+    const std::string key = entry.first.Scalar();
+    const NodeSpec* spec = findNodeSpec(entry.second.IsSequence() ? key + "_x" : key);
+    EXPECT_TRUE(lcs::findSolverParam(key) != nullptr || spec != nullptr) << key << " is in no table";
+    if (spec == nullptr) continue;
+    if (spec->type == "vec3") {
+      ASSERT_EQ(entry.second.size(), 3u) << key;
+      for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(entry.second[i].as<double>(), spec->def) << key;
+    } else if (spec->type == "double" || spec->type == "int") {
+      EXPECT_EQ(entry.second.as<double>(), spec->def) << key;
+    } else {
+      EXPECT_EQ(entry.second.Scalar(), spec->def_text) << key;
+    }
+  }
+  for (const NodeSpec& spec : nodeSpecs())
+    EXPECT_TRUE(root[spec.name] || (spec.type == "vec3" && root[spec.name.substr(0, spec.name.size() - 2)]))
+        << spec.name << " missing from default.yaml";
 }
 
 TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
@@ -162,7 +227,15 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
     in_config.insert(description->name);
     const lcs::ParamSpec* spec = lcs::findSolverParam(description->name);
     if (spec == nullptr) {
-      EXPECT_EQ(kDisplayConfigNames.count(description->name), 1u) << description->name << " is in no table";
+      const NodeSpec* node_spec = findNodeSpec(description->name);
+      ASSERT_NE(node_spec, nullptr) << description->name << " is in no table";
+      EXPECT_TRUE(node_spec->in_config) << node_spec->name;
+      EXPECT_EQ(description->description, node_spec->doc) << node_spec->name;
+      EXPECT_EQ(configText(def, node_spec->name), node_spec->type == "bool" ? node_spec->def_text : numberText(node_spec->def));
+      if (node_spec->type != "bool") {
+        EXPECT_EQ(configNumber(lo, node_spec->name), node_spec->min) << node_spec->name;
+        EXPECT_EQ(configNumber(hi, node_spec->name), node_spec->max) << node_spec->name;
+      }
       continue;
     }
     EXPECT_TRUE(spec->access & lcs::kParamReconfigure) << spec->name;
@@ -179,20 +252,31 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
   }
   for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
     EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::kParamReconfigure) ? 1u : 0u) << spec.name;
+  for (const NodeSpec& spec : nodeSpecs()) EXPECT_EQ(in_config.count(spec.name), spec.in_config ? 1u : 0u) << spec.name;
+}
+
+TEST(ParamTable, NodeSettingsDefaultsAreTheNodeTable) {
+  for (const NodeSpec& spec : nodeSpecs()) EXPECT_EQ(spec.value, spec.def_text) << spec.name;
 }
 
 TEST(ParamTable, ConfigRoundTripCarriesEveryReconfigurableParameter) {
   lcp_contact_solver_ros::NodeSettings s;
-  for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
-                        "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
-                        "displayDebug=true", "solver=prox", "friction_model=pyramid8", "sor=1.3",
-                        "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
-                        "constraint_level=velocity", "time_step=0.01", "max_rows=12"})
-    ASSERT_EQ(lcs::applyAssignment(&s.solver, a), "") << a;
+  s.solver = changedParams();
+  s.display.showTranslation = {{1.0, -2.0, 3.5}};
+  s.display.force_arrow_scale = 0.5;
+  s.display.show_w_heatmap = false;
+  s.display.showCellWidth = 0.25;
   lcp_contact_solver_ros::NodeSettings t;
   ASSERT_EQ(lcp_contact_solver_ros::fromConfig(lcp_contact_solver_ros::toConfig(s), &t), "");
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    EXPECT_EQ(lcs::paramText(t.solver, spec.name), lcs::paramText(s.solver, spec.name)) << spec.name;
+  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+    const lcs::SolverParams& expected = (spec.access & lcs::kParamReconfigure) ? s.solver : t.solver;
+    EXPECT_EQ(lcs::paramText(t.solver, spec.name), lcs::paramText(expected, spec.name)) << spec.name;
+  }
+  EXPECT_EQ(t.solver.islands, lcp_contact_solver_ros::NodeSettings().solver.islands);  // start-up only: kept
+  EXPECT_EQ(t.display.showTranslation, s.display.showTranslation);
+  EXPECT_EQ(t.display.force_arrow_scale, 0.5);
+  EXPECT_FALSE(t.display.show_w_heatmap);
+  EXPECT_EQ(t.display.showCellWidth, 0.25);
 }
 
 TEST(ParamTable, ServiceOverridesAreTheTablesOverrideColumn) {
@@ -252,6 +336,19 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
     EXPECT_EQ(cells[4], runtime) << spec.name;
     for (const std::string& choice : spec.choices)
       EXPECT_NE(cells[5].find("`" + choice + "`"), std::string::npos) << spec.name << ": " << choice;
+  }
+  for (const NodeSpec& spec : nodeSpecs()) {
+    if (spec.type == "vec3") continue;  // one row for the three config fields
+    ASSERT_EQ(rows.count(spec.name), 1u) << spec.name << " has no README row";
+    const std::vector<std::string>& cells = rows[spec.name];
+    EXPECT_EQ(cells[1], spec.type == "enum" ? "string" : spec.type) << spec.name;
+    const std::string shown = cells[2].substr(0, cells[2].find(' '));
+    if (spec.type == "double" || spec.type == "int") {
+      EXPECT_EQ(std::strtod(shown.c_str(), nullptr), spec.def) << spec.name;
+    } else {
+      EXPECT_EQ(shown, spec.def_text) << spec.name;
+    }
+    EXPECT_EQ(cells[4], spec.in_config ? "yes" : "no") << spec.name;
   }
   // The service paragraph: "`param_overrides` changes ... each as `name=value`: `a`, `b`, ... (e.g."
   const std::string intro = "each as\n`name=value`:";

@@ -1,6 +1,7 @@
-// The node's parameters: SOFA's solver fields (core SolverParams) plus the node-only
-// ones, read from the private namespace, from dynamic_reconfigure, or from the service's
-// "name=value" overrides, and validated before use.
+// The node's parameters: SOFA's solver fields (core SolverParams, core/solver_param_table.def)
+// plus the node-only ones (node_param_table.def: the defaults below must match it, which
+// test_param_table checks), read from the private namespace, from dynamic_reconfigure, or
+// from the service's "name=value" overrides, and validated before use.
 #pragma once
 
 #include "lcp_contact_solver/ros/input_queue.h"

@@ -13,15 +13,23 @@ namespace lcp_contact_solver_ros {
 
 namespace {
 
-// The node's parameters that do not change the forces: accepted in a parameter file and
-// ignored offline.
+// The node's own parameters (node_param_table.def), which do not change the forces:
+// accepted in a parameter file and ignored offline.
 const std::set<std::string>& nodeOnlyParams() {
   static const std::set<std::string> names = {
-      "showCellWidth", "showTranslation", "showTranslation_x", "showTranslation_y",
-      "showTranslation_z",  // the last three: dynamic_reconfigure's copies (rosparam dump of a running node)
-      "pairing_window", "queue_size", "overload",
-      "force_arrow_scale", "show_w_heatmap", "heatmap_max_rows", "cone_height", "marker_lifetime",
-      "diagnostics_min_rate", "diagnostics_max_rate"};
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) #name,
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) #name,
+#define LCS_NODE_BOOL(name, member, def, group, doc) #name,
+// dynamic_reconfigure's copies too (rosparam dump of a running node)
+#define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) #name, #name "_x", #name "_y", #name "_z",
+#define LCS_NODE_ENUM(name, member, def, group, doc) #name,
+#include "lcp_contact_solver/ros/node_param_table.def"
+#undef LCS_NODE_DOUBLE
+#undef LCS_NODE_INT
+#undef LCS_NODE_BOOL
+#undef LCS_NODE_VEC3
+#undef LCS_NODE_ENUM
+  };
   return names;
 }
 
