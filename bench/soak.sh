@@ -4,7 +4,7 @@
 # minutes, the node's resident memory (VmRSS, /proc/<pid>/status) sampled once per second.
 #
 #   bench/soak.sh [--build DIR] [--duration S] [--rate HZ] [--bag BAG] [--csv OUT.csv]
-#                 [--param NAME=VALUE]...
+#                 [--param NAME=VALUE]... [--pin CPUS]
 #
 # Defaults: build folder ./build (contact_solver_node and soak_feeder built there, e.g. by
 # `make soak`), 300 s, 1000 Hz, test/data/box_stack.bag, bench/results/soak_rss_<bag>.csv.
@@ -24,6 +24,7 @@ rate=1000
 bag="$here/test/data/box_stack.bag"
 csv=""
 params=()
+pin=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -32,6 +33,7 @@ while [ $# -gt 0 ]; do
     --bag) bag="$2"; shift 2 ;;
     --csv) csv="$2"; shift 2 ;;
     --param) params+=("$2"); shift 2 ;;
+    --pin) pin="$2"; shift 2 ;;  # the node under taskset -c CPUS (e.g. 1: one core)
     -h | --help) sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "soak: unknown option $1 (--help)" >&2; exit 2 ;;
   esac
@@ -83,7 +85,9 @@ roscore_pid=$!
 for _ in $(seq 100); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
 rosparam load "$here/config/default.yaml" /contact_solver || { echo "soak: no master on port $port" >&2; exit 1; }
 for p in "${params[@]}"; do rosparam set "/contact_solver/${p%%=*}" "${p#*=}" || exit 1; done
-setsid "$bin/contact_solver_node" __name:=contact_solver >"$ROS_LOG_DIR/soak_node.out" 2>&1 </dev/null &
+node_cmd=("$bin/contact_solver_node")
+[ -z "$pin" ] || node_cmd=(taskset -c "$pin" "$bin/contact_solver_node")
+setsid "${node_cmd[@]}" __name:=contact_solver >"$ROS_LOG_DIR/soak_node.out" 2>&1 </dev/null &
 node_pid=$!
 
 rss() { awk '/^VmRSS:/ {print $2}' "/proc/$node_pid/status" 2>/dev/null; }
