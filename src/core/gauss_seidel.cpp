@@ -668,29 +668,19 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
     } else {
       report.solver_error = residual;
       if (residual <= params.tolerance) {
-        // Confirm on an exactly recomputed d: the maintained one carries round-off.
         access.refresh(lambda);
         Eigen::VectorXd d_exact;
         ctx.computeD(lambda, d_exact);
-        report.solver_error = residualOf(lambda, d_exact);
-        if (report.solver_error <= params.tolerance) {
-          report.status = SolveStatus::kConverged;
-          return report;
-        }
+        if (confirmConverged(report, residualOf(lambda, d_exact), params.tolerance)) return report;
       }
     }
     // At most one clock read per sweep.
     if (sweep < params.maxIt && ctx.deadlinePassed()) {
-      lambda = best;
-      report.status = SolveStatus::kTimeBudget;
-      report.message = "time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
-                       std::to_string(sweep) + " sweeps; best iterate returned";
+      endOnTimeBudget(report, lambda, best, params.time_budget, sweep);
       return report;
     }
   }
-  lambda = best;
-  report.status = SolveStatus::kMaxIterations;
-  report.message = "maxIt (" + std::to_string(params.maxIt) + ") sweeps reached before the tolerance";
+  endOnMaxIt(report, lambda, best, params.maxIt);
   return report;
 }
 

@@ -190,27 +190,17 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
     } else {
       report.solver_error = residual;
       if (residual <= params.tolerance) {
-        // Confirm on an exactly recomputed d: the maintained one carries round-off.
         ctx.computeD(lambda, d);
         dd = d.data();
-        report.solver_error = residualOf(lambda, d);
-        if (report.solver_error <= params.tolerance) {
-          report.status = SolveStatus::kConverged;
-          return report;
-        }
+        if (confirmConverged(report, residualOf(lambda, d), params.tolerance)) return report;
       }
     }
     if (sweep < params.maxIt && ctx.deadlinePassed()) {
-      lambda = best;
-      report.status = SolveStatus::kTimeBudget;
-      report.message = "time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
-                       std::to_string(sweep) + " sweeps; best iterate returned";
+      endOnTimeBudget(report, lambda, best, params.time_budget, sweep);
       return report;
     }
   }
-  lambda = best;
-  report.status = SolveStatus::kMaxIterations;
-  report.message = "maxIt (" + std::to_string(params.maxIt) + ") sweeps reached before the tolerance";
+  endOnMaxIt(report, lambda, best, params.maxIt);
   return report;
 }
 

@@ -50,6 +50,29 @@ struct KernelReport {
   std::vector<std::pair<std::string, double>> stages;  // auto: (member, seconds) per stage
 };
 
+// The two ends of a sweep loop that did not converge: the time budget ran out after `sweeps`,
+// or maxIt was reached. Both leave the best iterate in `lambda`.
+inline void endOnTimeBudget(KernelReport& report, Eigen::VectorXd& lambda, const Eigen::VectorXd& best,
+                            double time_budget, int sweeps) {
+  lambda = best;
+  report.status = SolveStatus::kTimeBudget;
+  report.message = "time budget (" + std::to_string(time_budget) + " s) ran out after " + std::to_string(sweeps) +
+                   " sweeps; best iterate returned";
+}
+// A sweep whose maintained d says "converged" is confirmed on an exactly recomputed d (the
+// maintained one carries round-off): true when that residual meets the tolerance too.
+inline bool confirmConverged(KernelReport& report, double exact_residual, double tolerance) {
+  report.solver_error = exact_residual;
+  if (exact_residual > tolerance) return false;
+  report.status = SolveStatus::kConverged;
+  return true;
+}
+inline void endOnMaxIt(KernelReport& report, Eigen::VectorXd& lambda, const Eigen::VectorXd& best, int max_it) {
+  lambda = best;
+  report.status = SolveStatus::kMaxIterations;
+  report.message = "maxIt (" + std::to_string(max_it) + ") sweeps reached before the tolerance";
+}
+
 // Each kernel starts from `lambda` (the warm start, rows of ignored contacts zero) and
 // leaves its best finite iterate there, whatever the status.
 KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
