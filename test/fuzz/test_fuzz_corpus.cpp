@@ -1,6 +1,7 @@
-// Replays every input kept under test/fuzz/corpus/<target>/ (the seeds, and every input a
-// fuzzing run found to crash, added after the fix) through the fuzz targets' functions in
-// the normal build, so `make test` (and its sanitizer pass) keeps them fixed.
+// Replays every input kept under test/fuzz/corpus/<target>/ (the seeds, every input a fuzzing
+// run found to crash, added after the fix, and the corpus the runs grew, minimized with
+// libFuzzer's -merge=1) through the fuzz targets' functions in the normal build, so `make test`
+// (and its sanitizer pass) keeps them fixed.
 #include "fuzz_targets.h"
 
 #include <gtest/gtest.h>
