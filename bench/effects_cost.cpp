@@ -129,9 +129,9 @@ void csvWrite(const CsvRow& r) {
   g_csv.flush();
 }
 
-int frictionlessCount(const lcs::Problem& p) {
+int frictionlessCount(const lcs::core::Problem& p) {
   int n = 0;
-  for (const lcs::Contact& c : p.contacts) n += c.type == lcs::ContactType::kFrictionless ? 1 : 0;
+  for (const lcs::core::Contact& c : p.contacts) n += c.type == lcs::core::ContactType::kFrictionless ? 1 : 0;
   return n;
 }
 
@@ -139,7 +139,7 @@ int frictionlessCount(const lcs::Problem& p) {
 std::int64_t pairOf(std::int64_t id) { return id >> 16; }
 
 // "Half of the body pairs": every other pair in order of first appearance.
-std::vector<bool> halfThePairs(const lcs::Problem& p) {
+std::vector<bool> halfThePairs(const lcs::core::Problem& p) {
   std::map<std::int64_t, int> index;
   std::vector<bool> pick(p.contacts.size());
   for (std::size_t i = 0; i < p.contacts.size(); ++i) {
@@ -151,11 +151,11 @@ std::vector<bool> halfThePairs(const lcs::Problem& p) {
 
 struct Variant {
   std::string name;
-  lcs::Problem problem;
+  lcs::core::Problem problem;
 };
 
-std::vector<Variant> variantsOf(const lcs::Problem& p6, double mu_tor, double mu_roll) {
-  using T = lcs::ContactType;
+std::vector<Variant> variantsOf(const lcs::core::Problem& p6, double mu_tor, double mu_roll) {
+  using T = lcs::core::ContactType;
   const ContactModel frictional{T::kFrictional, 3, 0.5, 0.0, 0.0};
   const ContactModel frictional0{T::kFrictional, 3, 0.0, 0.0, 0.0};
   const ContactModel frictionless{T::kFrictionless, 1, 0.0, 0.0, 0.0};
@@ -183,11 +183,11 @@ std::map<std::string, std::map<std::string, std::map<std::string, double>>> g_ta
 std::map<std::string, std::map<std::string, std::map<std::string, std::string>>> g_ran;
 
 struct ToTol {
-  lcs::SolverKind kind;
+  lcs::core::SolverKind kind;
   double tol;
 };
-const ToTol kToTol[] = {{lcs::SolverKind::kNlgs, 1e-4}, {lcs::SolverKind::kAuto, 1e-4}, {lcs::SolverKind::kAuto, 1e-6}};
-const lcs::SolverKind kSweepSolvers[] = {lcs::SolverKind::kNlgs, lcs::SolverKind::kAuto};
+const ToTol kToTol[] = {{lcs::core::SolverKind::kNlgs, 1e-4}, {lcs::core::SolverKind::kAuto, 1e-4}, {lcs::core::SolverKind::kAuto, 1e-6}};
+const lcs::core::SolverKind kSweepSolvers[] = {lcs::core::SolverKind::kNlgs, lcs::core::SolverKind::kAuto};
 
 // Every measurement of every variant of one problem, in `rounds` interleaved rounds.
 void measureProblem(const std::string& problem_name, const std::vector<Variant>& variants, double budget, int rounds) {
@@ -197,7 +197,7 @@ void measureProblem(const std::string& problem_name, const std::vector<Variant>&
   std::vector<std::array<lcs_bench::SolveAcc, 3>> tol_acc(nv);
   lcs_bench::interleavedRounds(rounds, nv, [&](std::size_t i) {
     for (int k = 0; k < 2; ++k) {
-      lcs::SolverParams params;
+      lcs::core::SolverParams params;
       params.solver = kSweepSolvers[k];
       lcs_bench::sweepRound(variants[i].problem, params, sweeps, &sweep_acc[i][k]);
     }
@@ -207,7 +207,7 @@ void measureProblem(const std::string& problem_name, const std::vector<Variant>&
   });
   for (std::size_t i = 0; i < nv; ++i) {
     const Variant& v = variants[i];
-    const lcs::Problem& p = v.problem;
+    const lcs::core::Problem& p = v.problem;
     const int rows = p.rowCount(), nc = static_cast<int>(p.contacts.size()), nf = frictionlessCount(p);
     auto& tab = g_table[problem_name][v.name];
     auto& ran = g_ran[problem_name][v.name];
@@ -215,29 +215,29 @@ void measureProblem(const std::string& problem_name, const std::vector<Variant>&
     tab["rows"] = rows;
     for (int k = 0; k < 2; ++k) {
       const lcs_bench::SweepTiming st = lcs_bench::sweepTiming(sweep_acc[i][k]);
-      CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::solverName(kSweepSolvers[k]), st.solver, "per_sweep"};
+      CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::core::solverName(kSweepSolvers[k]), st.solver, "per_sweep"};
       r.iterations = st.sweeps;
       r.seconds = st.per_sweep * st.sweeps;
       r.us_per_sweep = 1e6 * st.per_sweep;
       r.us_marginal = 1e6 * st.marginal;
       r.residual = st.result.residual;
-      r.status = lcs::statusName(st.result.status);
+      r.status = lcs::core::statusName(st.result.status);
       csvWrite(r);
-      tab[std::string("sweep_") + lcs::solverName(kSweepSolvers[k])] = 1e6 * st.per_sweep;
-      tab[std::string("marginal_") + lcs::solverName(kSweepSolvers[k])] = 1e6 * st.marginal;
-      ran[std::string("sweep_") + lcs::solverName(kSweepSolvers[k])] = st.solver;
+      tab[std::string("sweep_") + lcs::core::solverName(kSweepSolvers[k])] = 1e6 * st.per_sweep;
+      tab[std::string("marginal_") + lcs::core::solverName(kSweepSolvers[k])] = 1e6 * st.marginal;
+      ran[std::string("sweep_") + lcs::core::solverName(kSweepSolvers[k])] = st.solver;
     }
     for (int k = 0; k < 3; ++k) {
       const lcs_bench::SolveAcc& a = tol_acc[i][k];
-      CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::solverName(kToTol[k].kind), a.result.solver,
+      CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::core::solverName(kToTol[k].kind), a.result.solver,
                "to_tolerance"};
       r.tolerance = kToTol[k].tol;
       r.iterations = a.result.iterations;
       r.seconds = a.best;
       r.residual = a.result.residual;
-      r.status = lcs::statusName(a.result.status);
+      r.status = lcs::core::statusName(a.result.status);
       csvWrite(r);
-      const std::string key = std::string(lcs::solverName(kToTol[k].kind)) + "@" + num(kToTol[k].tol, "%.0e");
+      const std::string key = std::string(lcs::core::solverName(kToTol[k].kind)) + "@" + num(kToTol[k].tol, "%.0e");
       tab["t_" + key] = a.result.converged ? 1e3 * a.best : std::nan("");
       tab["it_" + key] = a.result.iterations;
       ran["t_" + key] = a.result.solver;
@@ -336,7 +336,7 @@ GenTiming timeGeneration(const sc::Scene& settled, int reps) {
       const sc::StepStats st = sim.step();
       ts.push_back(lcs_bench::threadCpuSeconds() - c0);
       tsolve.push_back(st.time_solve);
-      g.step_status = st.solved ? lcs::statusName(st.status) : "no_contacts";
+      g.step_status = st.solved ? lcs::core::statusName(st.status) : "no_contacts";
     }
   }
   g.build = fastest(tb);
@@ -352,7 +352,7 @@ struct GenRow {
 
 std::vector<GenRow> measureGeneration(const std::string& scenes_dir, int n, int reps) {
   sc::SceneParams params = sc::loadSceneParams(scenes_dir + "/sphere_pile.yaml");
-  params.solver.solver = lcs::SolverKind::kAuto;
+  params.solver.solver = lcs::core::SolverKind::kAuto;
   params.solver.tolerance = 1e-4;
   params.solver.maxIt = 500;
   sc::Scene scene = sc::loadSceneFromUrdfString(pileUrdf(n), params, "effects_pile");
@@ -466,7 +466,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> names;
   for (const lcs_bench::SceneProblem& sp : problems) {
     if (sp.problem.contacts.empty()) continue;
-    for (const lcs::Contact& c : sp.problem.contacts)
+    for (const lcs::core::Contact& c : sp.problem.contacts)
       if (c.rows != 6) throw std::runtime_error(sp.name + ": a contact without 6 rows");
     names.push_back(sp.name);
     measureProblem(sp.name, variantsOf(sp.problem, o.torsional, o.rolling), o.budget, o.rounds);

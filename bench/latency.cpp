@@ -138,7 +138,7 @@ double cpuSeconds(int pid) {
 
 // Every contact at the origin with normal +z and that normal's rule tangents, given
 // explicitly (a default ContactFrame): the geometry does not enter the solve.
-lcs::ContactArray toArrayMsg(const lcs::Problem& p) {
+lcs::ContactArray toArrayMsg(const lcs::core::Problem& p) {
   std_msgs::Header header;
   header.frame_id = "world";
   std::vector<lros::ContactBodies> bodies(p.contacts.size());
@@ -279,7 +279,7 @@ struct Tracker {
 
 struct Case {
   std::string name;
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   lcs::ContactArray contacts;
   lcs::Compliance compliance;
 };
@@ -331,7 +331,7 @@ class Sender {
 // whole CycleSolver::solve, serialization both ways, markers. Median wall times of repeats.
 template <class Cases>
 int runReference(const Options& o, const lros::NodeSettings& settings, Cases& problems) {
-  const lcs::SolverParams& params = settings.solver;
+  const lcs::core::SolverParams& params = settings.solver;
   std::ifstream probe(o.out);
   const bool fresh = !probe.good() || probe.peek() == std::ifstream::traits_type::eof();
   probe.close();
@@ -343,16 +343,16 @@ int runReference(const Options& o, const lros::NodeSettings& settings, Cases& pr
               "(ms) | serialize + deserialize in / out (ms) | bytes in / out | markers build (ms, bytes) |\n"
               "|---|---:|---|---:|---:|---:|---:|---|---|---|\n");
   for (auto& p : problems) {
-    lcs::Problem converted;
+    lcs::core::Problem converted;
     std::vector<lros::ContactFrame> frames;
     const double t_convert = medianTime([&] {
-      converted = lcs::Problem();
+      converted = lcs::core::Problem();
       frames.clear();
       lros::toProblem(p.contacts, p.compliance, 0, &converted, &frames);
     });
-    lcs::ContactSolver solver(params);
+    lcs::core::ContactSolver solver(params);
     if (params.initial_guess) solver.solve(converted);
-    lcs::SolveResult result;
+    lcs::core::SolveResult result;
     const double t_solve = medianTime([&] { result = solver.solve(converted); });
     lcs::ConstraintForces forces;
     const double t_forces = medianTime([&] { forces = lros::toConstraintForcesMsg(p.contacts, frames, converted, result); });
@@ -364,7 +364,7 @@ int runReference(const Options& o, const lros::NodeSettings& settings, Cases& pr
     const double t_ser_out = serializationTime(out.forces) + serializationTime(out.stats);
     const std::uint32_t bytes_in = wireBytes(p.contacts) + wireBytes(p.compliance);
     const std::uint32_t bytes_out = wireBytes(out.forces) + wireBytes(out.stats);
-    const std::vector<double> mu = lcs::effectiveMu(out.problem, params.mu);
+    const std::vector<double> mu = lcs::core::effectiveMu(out.problem, params.mu);
     visualization_msgs::MarkerArray markers;
     const double t_markers = medianTime(
         [&] { markers = lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display); });
@@ -457,7 +457,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "latency: /contact_solver parameters: %s\n", err.c_str());
     return 1;
   }
-  const lcs::SolverParams& params = settings.solver;
+  const lcs::core::SolverParams& params = settings.solver;
   const bool warm = params.initial_guess;
 
   std::vector<Case> problems;
@@ -512,7 +512,7 @@ int main(int argc, char** argv) {
            "node_internal_overhead_median_ms,node_internal_overhead_p90_ms,sent,skipped,node_cpu_ms_per_answer\n";
 
   std::printf("latency: %s, markers subscriber %d, warm start %s; solver %s, tolerance %g, maxIt %d; load %s\n",
-              o.label.c_str(), o.markers, warm ? "on" : "off", lcs::solverName(params.solver), params.tolerance,
+              o.label.c_str(), o.markers, warm ? "on" : "off", lcs::core::solverName(params.solver), params.tolerance,
               params.maxIt, lcs_bench::loadAverageText().c_str());
   std::printf("| problem | contacts | phase | received | rate (Hz) | latency median / p90 / p99 (ms) | node solve_time "
               "(ms) | latency − solve_time (ms) | in the node: latency − solve_time (ms) | in-process solve / cycle (ms) | "
@@ -522,9 +522,9 @@ int main(int argc, char** argv) {
 
   for (Case& p : problems) {
     // ---- in-process references ----
-    lcs::ContactSolver solver(params);
+    lcs::core::ContactSolver solver(params);
     if (warm) solver.solve(p.problem);  // the node has seen this problem before
-    lcs::SolveResult last;
+    lcs::core::SolveResult last;
     const double t_solve = medianTime([&] { last = solver.solve(p.problem); });
     lros::CycleSolver cycle(params);
     if (warm) cycle.solve(p.contacts, p.compliance, true);
@@ -538,7 +538,7 @@ int main(int argc, char** argv) {
     const double t_ser_out = serializationTime(out.forces) + serializationTime(out.stats);
     const std::uint32_t bytes_in = wireBytes(p.contacts) + wireBytes(p.compliance);
     const std::uint32_t bytes_out = wireBytes(out.forces) + wireBytes(out.stats);
-    const std::vector<double> mu = lcs::effectiveMu(out.problem, params.mu);
+    const std::vector<double> mu = lcs::core::effectiveMu(out.problem, params.mu);
     visualization_msgs::MarkerArray markers;
     const double t_markers = medianTime(
         [&] { markers = lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display); });

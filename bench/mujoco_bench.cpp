@@ -29,7 +29,7 @@
 // second beside the machine's stream bandwidth (a triad a = b + s c over 3 × 64 MB, best of 5).
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
-#include "lcp_contact_solver/core/scalar_rows.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
 #include <algorithm>
@@ -92,9 +92,9 @@ double triadBandwidth() {
 
 // Bytes one scalar-row sweep reads at most: per stored entry an index and a value (the d it
 // updates stays in cache), per row the column start, inverse diagonal, kind, λ and d.
-double scalarSweepBytes(const Problem& p) {
-  if (!fitsScalarRows(p)) return 0.0;
-  const auto& W = std::get<BlockSparseMatrix>(p.W);
+double scalarSweepBytes(const core::Problem& p) {
+  if (!core::fitsScalarRows(p)) return 0.0;
+  const auto& W = std::get<core::BlockSparseMatrix>(p.W);
   return 12.0 * double(W.values.size()) + 29.0 * double(W.blockCount());
 }
 
@@ -162,10 +162,10 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
   std::string name = path.substr(path.find_last_of('/') + 1);
   name = name.substr(0, name.find_last_of('.'));
 
-  std::map<std::string, ContactSolver> ours;
+  std::map<std::string, core::ContactSolver> ours;
   for (const std::string& s : o.ours) {
-    SolverParams p;
-    if (!parseSolverName(s, &p.solver)) {
+    core::SolverParams p;
+    if (!core::parseSolverName(s, &p.solver)) {
       std::cerr << "mujoco_bench: unknown solver " << s << "\n";
       std::exit(2);
     }
@@ -173,7 +173,7 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
     p.threads = o.threads;
     p.islands = o.islands;
     p.maxIt = s == "lemke" ? 1000000 : 100000;
-    ours.emplace(s, ContactSolver(p));
+    ours.emplace(s, core::ContactSolver(p));
   }
   std::vector<int> mj_solvers;
   for (const std::string& s : o.mujoco) {
@@ -222,10 +222,10 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
           r.solver = "ours_" + solver_name + suffix;
           r.seconds = 1e300;
           r.sweep_bytes = solver_name == "pgs" ? scalarSweepBytes(mp.problem) : 0.0;
-          ContactSolver used = solver;
+          core::ContactSolver used = solver;
           for (int k = 0; k < o.repeat; ++k) {
-            ContactSolver trial = solver;  // the same warm start each repeat
-            const SolveResult result = trial.solve(mp.problem);
+            core::ContactSolver trial = solver;  // the same warm start each repeat
+            const core::SolveResult result = trial.solve(mp.problem);
             r.seconds = std::min(r.seconds, result.solve_time);
             r.iterations = result.iterations;
             r.residual = result.residual;
@@ -257,10 +257,10 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
             rows->push_back(t);
           }
         }
-        const std::size_t stored = std::holds_alternative<BlockSparseMatrix>(mp.problem.W)
-                                       ? std::get<BlockSparseMatrix>(mp.problem.W).values.size()
+        const std::size_t stored = std::holds_alternative<core::BlockSparseMatrix>(mp.problem.W)
+                                       ? std::get<core::BlockSparseMatrix>(mp.problem.W).values.size()
                                        : std::size_t(base.rows) * base.rows;
-        const Islands islands = findIslands(mp.problem);
+        const core::Islands islands = core::findIslands(mp.problem);
         std::size_t largest = 0;
         for (const auto& list : islands.contacts) largest = std::max(largest, list.size());
         std::fprintf(stderr, "%s step %d: %d contacts, %d rows, %zu stored W entries, %d islands (largest %zu contacts)\n",

@@ -38,11 +38,11 @@ class BulletPeer : public Peer {
   BulletPeer(std::string name, bool dantzig) : name_(std::move(name)), dantzig_(dantzig) {}
   std::string name() const override { return name_; }
   SweepKind sweep() const override { return dantzig_ ? SweepKind::kDirect : SweepKind::kIterations; }
-  bool applies(const lcs::Problem& problem) const override { return problem.rowCount() > 0; }
+  bool applies(const lcs::core::Problem& problem) const override { return problem.rowCount() > 0; }
 
-  void prepare(const lcs::Problem& problem) override {
+  void prepare(const lcs::core::Problem& problem) override {
     const int n = problem.rowCount();
-    const Eigen::MatrixXd W = lcs::toDense(problem.W);
+    const Eigen::MatrixXd W = lcs::core::toDense(problem.W);
     A_.resize(n, n);
     A_.setZero();
     for (int i = 0; i < n; ++i)
@@ -55,13 +55,13 @@ class BulletPeer : public Peer {
     dependency_.resize(n);
     const std::vector<int> offsets = problem.rowOffsets();
     for (std::size_t c = 0; c < problem.contacts.size(); ++c) {
-      const lcs::Contact& contact = problem.contacts[c];
+      const lcs::core::Contact& contact = problem.contacts[c];
       const int off = offsets[c];
       for (int k = 0; k < contact.rows; ++k) {
         const int i = off + k;
         b_[i] = -problem.d_free[i];
         dependency_[i] = -1;
-        if (contact.type == lcs::ContactType::kBilateral) {
+        if (contact.type == lcs::core::ContactType::kBilateral) {
           lo_[i] = -BT_LARGE_FLOAT;
           hi_[i] = BT_LARGE_FLOAT;
         } else if (k == 0) {

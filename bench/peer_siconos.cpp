@@ -36,15 +36,15 @@ namespace lcs = lcp_contact_solver;
 
 // Builds a Siconos matrix with W's storage. Returns nullptr when a block-sparse W has
 // blocks that are not 3x3 (Siconos' SBM fc3d path needs uniform blocks).
-NumericsMatrix* toNumericsMatrix(const lcs::ComplianceMatrix& W, int block_size, bool csc = false) {
-  const int n = lcs::complianceRows(W);
+NumericsMatrix* toNumericsMatrix(const lcs::core::ComplianceMatrix& W, int block_size, bool csc = false) {
+  const int n = lcs::core::complianceRows(W);
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
     NumericsMatrix* M = NM_create(NM_DENSE, n, n);
     // Eigen's default storage is column-major, like Siconos' matrix0.
     std::memcpy(M->matrix0, dense->data(), sizeof(double) * static_cast<std::size_t>(n) * n);
     return M;
   }
-  const auto& S = std::get<lcs::BlockSparseMatrix>(W);
+  const auto& S = std::get<lcs::core::BlockSparseMatrix>(W);
   for (int b = 0; b < S.blockCount(); ++b)
     if (S.block_offset[b + 1] - S.block_offset[b] != block_size) return nullptr;
   NumericsMatrix* T = NM_create(NM_SPARSE, n, n);
@@ -130,21 +130,21 @@ class SiconosFc3d : public Peer {
   ~SiconosFc3d() override { release(); }
   std::string name() const override { return name_; }
   SweepKind sweep() const override { return SweepKind::kTolerance; }
-  bool applies(const lcs::Problem& problem) const override { return isFc3d(problem); }
+  bool applies(const lcs::core::Problem& problem) const override { return isFc3d(problem); }
 
   // Siconos keeps state in the problem's matrix between calls (factorizations, work
   // arrays): a second PROX call on the same problem stops at once. So every solve gets a
   // fresh copy, built outside the timed region.
-  void prepare(const lcs::Problem& problem) override { source_ = &problem; }
+  void prepare(const lcs::core::Problem& problem) override { source_ = &problem; }
   void beforeSolve() override { build(*source_); }
 
-  void build(const lcs::Problem& problem) {
+  void build(const lcs::core::Problem& problem) {
     release();
     NumericsMatrix* M = toNumericsMatrix(problem.W, 3, csc_);
     if (M == nullptr) return;
     const std::vector<double> mu = [&] {
       std::vector<double> m;
-      for (const lcs::Contact& c : problem.contacts) m.push_back(c.mu < 0 ? 0.6 : c.mu);
+      for (const lcs::core::Contact& c : problem.contacts) m.push_back(c.mu < 0 ? 0.6 : c.mu);
       return m;
     }();
     Eigen::VectorXd mu_v = Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
@@ -179,7 +179,7 @@ class SiconosFc3d : public Peer {
   std::string name_;
   int id_;
   bool csc_;
-  const lcs::Problem* source_ = nullptr;
+  const lcs::core::Problem* source_ = nullptr;
   FrictionContactProblem* problem_ = nullptr;
   int n_ = 0;
 };
@@ -191,16 +191,16 @@ class SiconosLcp : public Peer {
   ~SiconosLcp() override { release(); }
   std::string name() const override { return name_; }
   SweepKind sweep() const override { return direct_ ? SweepKind::kDirect : SweepKind::kTolerance; }
-  bool applies(const lcs::Problem& problem) const override { return isLcp(problem); }
+  bool applies(const lcs::core::Problem& problem) const override { return isLcp(problem); }
 
-  void prepare(const lcs::Problem& problem) override { source_ = &problem; }
+  void prepare(const lcs::core::Problem& problem) override { source_ = &problem; }
   void beforeSolve() override { build(*source_); }
 
-  void build(const lcs::Problem& problem) {
+  void build(const lcs::core::Problem& problem) {
     release();
     problem_ = newLCP();
     problem_->size = problem.rowCount();
-    problem_->M = toNumericsMatrix(lcs::ComplianceMatrix(lcs::toDense(problem.W)), 1);
+    problem_->M = toNumericsMatrix(lcs::core::ComplianceMatrix(lcs::core::toDense(problem.W)), 1);
     problem_->q = copyToMalloc(problem.d_free);
     n_ = problem.rowCount();
   }
@@ -226,7 +226,7 @@ class SiconosLcp : public Peer {
   std::string name_;
   int id_;
   bool direct_;
-  const lcs::Problem* source_ = nullptr;
+  const lcs::core::Problem* source_ = nullptr;
   LinearComplementarityProblem* problem_ = nullptr;
   int n_ = 0;
 };

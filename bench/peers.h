@@ -40,9 +40,9 @@ class Peer {
   virtual std::string name() const = 0;
   virtual SweepKind sweep() const = 0;
   // Whether the method treats this problem at all (e.g. an LCP solver needs no friction).
-  virtual bool applies(const lcp_contact_solver::Problem& problem) const = 0;
+  virtual bool applies(const lcp_contact_solver::core::Problem& problem) const = 0;
   // Converts the problem into the method's own data; not timed.
-  virtual void prepare(const lcp_contact_solver::Problem& problem) = 0;
+  virtual void prepare(const lcp_contact_solver::core::Problem& problem) = 0;
   // Called before every solve, not timed: a peer whose data a solve may change rebuilds it.
   virtual void beforeSolve() {}
   // Solves the prepared problem from a zero initial guess; timed by the caller.
@@ -58,8 +58,8 @@ std::vector<std::unique_ptr<Peer>> makeSiconosPeers();
 std::vector<std::unique_ptr<Peer>> makeBulletPeers();
 
 // True when every contact is a 3-row frictional contact (what an fc3d solver accepts).
-bool isFc3d(const lcp_contact_solver::Problem& problem);
+bool isFc3d(const lcp_contact_solver::core::Problem& problem);
 // True when every contact is a 1-row frictionless contact (an LCP).
-bool isLcp(const lcp_contact_solver::Problem& problem);
+bool isLcp(const lcp_contact_solver::core::Problem& problem);
 
 }  // namespace lcs_bench

@@ -165,22 +165,22 @@ int main(int argc, char** argv) {
               "ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
               "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (lcs_bench::SceneProblem& sp : problems) {
-    const lcs::Problem& sparse = sp.problem;
+    const lcs::core::Problem& sparse = sp.problem;
     const int nc = static_cast<int>(sparse.contacts.size()), rows = sparse.rowCount();
     if (nc == 0) continue;
     const std::string family = sp.name.rfind("box_pyramid", 0) == 0 ? "box_pyramid" : "sphere_pile";
     struct Form {
       std::string name;
-      const lcs::Problem* problem;
+      const lcs::core::Problem* problem;
       bool build_lcp;
     };
-    lcs::Problem dense;
+    lcs::core::Problem dense;
     const double dense_bytes = static_cast<double>(rows) * rows * sizeof(double);
     const bool do_dense = dense_bytes <= o.dense_max_gb * 1e9;
     std::vector<Form> forms;
     if (do_dense) {
       dense = sparse;
-      dense.W = std::get<lcs::BlockSparseMatrix>(sparse.W).toDense();
+      dense.W = std::get<lcs::core::BlockSparseMatrix>(sparse.W).toDense();
       forms.push_back({"dense", &dense, true});
     } else {
       csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense," << num(dense_bytes)
@@ -194,11 +194,11 @@ int main(int argc, char** argv) {
     // then solves the problem as given instead of a stabilized copy of it (W included), so the
     // setup difference is what that copy costs per solve.
     int penetrating = 0;
-    for (const lcs::Contact& c : sparse.contacts) penetrating += c.gap < 0.0 && c.erp > 0.0 ? 1 : 0;
-    std::vector<lcs::Problem> plain(forms.size());
+    for (const lcs::core::Contact& c : sparse.contacts) penetrating += c.gap < 0.0 && c.erp > 0.0 ? 1 : 0;
+    std::vector<lcs::core::Problem> plain(forms.size());
     for (std::size_t i = 0; i < forms.size(); ++i) {
       plain[i] = *forms[i].problem;
-      for (lcs::Contact& c : plain[i].contacts) c.erp = 0.0;
+      for (lcs::core::Contact& c : plain[i].contacts) c.erp = 0.0;
     }
 
     // Every measurement of every form, in interleaved rounds (timing_util.h); fastest counts.
@@ -207,13 +207,13 @@ int main(int argc, char** argv) {
     std::vector<lcs_bench::SweepAcc> sweep_acc(forms.size()), plain_acc(forms.size());
     std::vector<std::array<lcs_bench::SolveAcc, 2>> tol_acc(forms.size());
     lcs_bench::interleavedRounds(o.rounds, forms.size(), [&](std::size_t i) {
-      lcs::SolverParams params;
-      params.solver = lcs::SolverKind::kNlgs;
+      lcs::core::SolverParams params;
+      params.solver = lcs::core::SolverKind::kNlgs;
       params.build_lcp = forms[i].build_lcp;
       lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
       if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
       for (int k = 0; k < 2; ++k) {
-        lcs::SolverParams p = lcs_bench::toleranceParams(lcs::SolverKind::kAuto, tols[k], o.budget, 1000000);
+        lcs::core::SolverParams p = lcs_bench::toleranceParams(lcs::core::SolverKind::kAuto, tols[k], o.budget, 1000000);
         p.build_lcp = forms[i].build_lcp;
         lcs_bench::solveRound(*forms[i].problem, p, &tol_acc[i][k]);
       }
@@ -237,7 +237,7 @@ int main(int argc, char** argv) {
           << num(1e6 * read_w) << ',' << num(st.per_sweep / read_w) << ',' << num(st.marginal / read_w) << ',';
       for (int k = 0; k < 2; ++k)
         csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver << ','
-            << lcs::statusName(tol[k].result.status) << ',';
+            << lcs::core::statusName(tol[k].result.status) << ',';
       csv << num(tol[1].result.residual) << ',' << penetrating << ',' << num(1e3 * plain_setup) << ','
           << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
       csv.flush();

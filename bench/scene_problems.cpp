@@ -103,7 +103,7 @@ SceneProblem runAndTake(const std::string& name, const std::string& scene_name, 
   out.problem.name = name;
   out.body_form = out.problem;
   out.body_form.W = Eigen::MatrixXd();
-  out.body_form.bodies = std::make_shared<const lcs::BodyCompliance>(
+  out.body_form.bodies = std::make_shared<const lcs::core::BodyCompliance>(
       sc::RigidContactModel(sim.scene(), step.frames).bodyCompliance(step.dt));
   return out;
 }
@@ -112,7 +112,7 @@ sc::SceneParams generationParams(const std::string& yaml) {
   sc::SceneParams params = sc::loadSceneParams(yaml);
   // Only to move the bodies to realistic contact states; the benchmark solves the taken
   // problem from scratch with every solver.
-  params.solver.solver = lcs::SolverKind::kNlgs;
+  params.solver.solver = lcs::core::SolverKind::kNlgs;
   params.solver.tolerance = 1e-6;
   params.solver.maxIt = 2000;
   params.compliance = sc::ComplianceStorage::kBlockSparse;

@@ -28,10 +28,10 @@ struct SceneProblem {
   std::string scene;  // the shipped scene whose parameters it uses
   int bodies = 0;
   int steps = 0;      // simulated steps before the problem was taken
-  lcp_contact_solver::Problem problem;
+  lcp_contact_solver::core::Problem problem;
   // The same step with the compliance in body form (Problem::bodies, no W; the unbuilt solve,
   // bench/unbuilt_scaling.cpp).
-  lcp_contact_solver::Problem body_form;
+  lcp_contact_solver::core::Problem body_form;
 };
 
 // Box pyramids with the given base widths, then sphere piles with the given ball counts.

@@ -12,8 +12,8 @@ int main() {
   for (int nc : {1, 3, 5}) {
     std::mt19937 rng(nc);
     std::uniform_real_distribution<double> u(-1, 1);
-    Problem p;
-    for (int i = 0; i < nc; ++i) { Contact c; c.id = i; c.type = ContactType::kFrictional; c.rows = 3; c.mu = 0.5; p.contacts.push_back(c); }
+    core::Problem p;
+    for (int i = 0; i < nc; ++i) { core::Contact c; c.id = i; c.type = core::ContactType::kFrictional; c.rows = 3; c.mu = 0.5; p.contacts.push_back(c); }
     const int n = 3 * nc;
     Eigen::MatrixXd J(n, 6 * nc);
     for (int r = 0; r < n; ++r) for (int k = 0; k < J.cols(); ++k) J(r, k) = u(rng);
@@ -22,17 +22,17 @@ int main() {
     p.W = W;
     p.d_free.resize(n);
     for (int r = 0; r < n; ++r) p.d_free[r] = r % 3 == 0 ? -0.5 : 0.1 * u(rng);
-    for (SolverKind kind : {SolverKind::kPgs, SolverKind::kNlgs}) {
-      SolverParams sp; sp.solver = kind; sp.tolerance = 1e-6; sp.mu = 0.5;
-      if (kind == SolverKind::kPgs) { for (auto& c : p.contacts) { c.type = ContactType::kFrictionless; } }
-      Problem q = p;
-      if (kind == SolverKind::kPgs) {  // frictionless: 1 row per contact
+    for (core::SolverKind kind : {core::SolverKind::kPgs, core::SolverKind::kNlgs}) {
+      core::SolverParams sp; sp.solver = kind; sp.tolerance = 1e-6; sp.mu = 0.5;
+      if (kind == core::SolverKind::kPgs) { for (auto& c : p.contacts) { c.type = core::ContactType::kFrictionless; } }
+      core::Problem q = p;
+      if (kind == core::SolverKind::kPgs) {  // frictionless: 1 row per contact
         for (auto& c : q.contacts) c.rows = 1;
         Eigen::MatrixXd Wn(nc, nc); Eigen::VectorXd dn(nc);
         for (int i = 0; i < nc; ++i) { dn[i] = p.d_free[3 * i]; for (int j = 0; j < nc; ++j) Wn(i, j) = W(3 * i, 3 * j); }
         q.W = Wn; q.d_free = dn;
       }
-      ContactSolver solver(sp);
+      core::ContactSolver solver(sp);
       solver.solve(q);
       const int reps = 100000;
       double best = 1e9;
@@ -41,8 +41,8 @@ int main() {
         for (int k = 0; k < reps; ++k) solver.solve(q);
         best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / reps);
       }
-      std::printf("%d contacts %s: %.2f us per warm solve\n", nc, solverName(kind), 1e6 * best);
-      for (auto& c : p.contacts) c.type = ContactType::kFrictional;
+      std::printf("%d contacts %s: %.2f us per warm solve\n", nc, core::solverName(kind), 1e6 * best);
+      for (auto& c : p.contacts) c.type = core::ContactType::kFrictional;
     }
   }
 }

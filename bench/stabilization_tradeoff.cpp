@@ -58,7 +58,7 @@ Row run(const Options& o, double erp, double softness) {
   scene::Scene s = scene::loadNamedScene(o.scenes_dir, o.scene);
   s.params.erp = erp;
   s.params.softness = softness;
-  s.params.solver.solver = lcs::SolverKind::kNlgs;
+  s.params.solver.solver = lcs::core::SolverKind::kNlgs;
   s.params.solver.tolerance = o.tolerance;
   s.params.solver.maxIt = 5000;
   scene::SceneSimulator sim(std::move(s));
@@ -66,7 +66,7 @@ Row run(const Options& o, double erp, double softness) {
   int counted = 0;
   for (int k = 0; k < o.steps; ++k) {
     sim.step();
-    const lcs::SolveResult& r = sim.lastSolve();
+    const lcs::core::SolveResult& r = sim.lastSolve();
     if (sim.lastProblem().problem.contacts.empty()) continue;
     if (k < o.steps / 3) continue;  // the settling transient is not the steady cost
     ++counted;

@@ -58,24 +58,24 @@ inline std::vector<int> parseIntList(const std::string& s) {
 }
 
 // Bytes of the stored compliance (values + index arrays; not the vectors' spare capacity).
-inline std::size_t bytesOf(const lcs::BlockSparseMatrix& W) {
+inline std::size_t bytesOf(const lcs::core::BlockSparseMatrix& W) {
   return W.values.size() * sizeof(double) +
          (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) * sizeof(int);
 }
-inline std::size_t bytesOf(const lcs::BodyCompliance& B) {
-  return B.body_compliance.size() * sizeof(lcs::BodyMatrix) + B.contacts.size() * sizeof(lcs::ContactJacobian) +
+inline std::size_t bytesOf(const lcs::core::BodyCompliance& B) {
+  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) + B.contacts.size() * sizeof(lcs::core::ContactJacobian) +
          static_cast<std::size_t>(B.diagonal.size()) * sizeof(double);
 }
-inline std::size_t bytesOfCompliance(const lcs::Problem& p) {
+inline std::size_t bytesOfCompliance(const lcs::core::Problem& p) {
   if (p.bodies) return bytesOf(*p.bodies);
   if (const auto* d = std::get_if<Eigen::MatrixXd>(&p.W)) return static_cast<std::size_t>(d->size()) * sizeof(double);
-  return bytesOf(std::get<lcs::BlockSparseMatrix>(p.W));
+  return bytesOf(std::get<lcs::core::BlockSparseMatrix>(p.W));
 }
 
 // What one contact becomes in a derived problem: its first `rows` rows of the source (the
 // normal first, then t1, t2, spin, rolling t1, rolling t2), a type and friction.
 struct ContactModel {
-  lcs::ContactType type = lcs::ContactType::kFrictional;
+  lcs::core::ContactType type = lcs::core::ContactType::kFrictional;
   int rows = 3;
   double mu = 0.5, mu_torsional = 0.0, mu_rolling = 0.0;
 };
@@ -84,18 +84,18 @@ struct ContactModel {
 // rows_i × rows_j corner and d_free keeps the leading rows of each contact. For rigid
 // contacts W = J M⁻¹ Jᵀ row by row, so this is exactly the problem the scene would build if
 // it asked each contact for those rows only. The body form, if any, is dropped.
-inline lcs::Problem deriveProblem(const lcs::Problem& src, const std::vector<ContactModel>& models) {
+inline lcs::core::Problem deriveProblem(const lcs::core::Problem& src, const std::vector<ContactModel>& models) {
   const int nc = static_cast<int>(src.contacts.size());
   if (static_cast<int>(models.size()) != nc) throw std::invalid_argument("deriveProblem: one model per contact");
   const std::vector<int> off = src.rowOffsets();
-  lcs::Problem out;
+  lcs::core::Problem out;
   out.name = src.name;
   out.contacts = src.contacts;
   std::vector<int> sizes(nc), keep_rows;
   for (int i = 0; i < nc; ++i) {
     const ContactModel& m = models[i];
     if (m.rows > src.contacts[i].rows) throw std::invalid_argument("deriveProblem: more rows than the source has");
-    lcs::Contact& c = out.contacts[i];
+    lcs::core::Contact& c = out.contacts[i];
     c.type = m.type;
     c.rows = m.rows;
     c.mu = m.mu;
@@ -113,8 +113,8 @@ inline lcs::Problem deriveProblem(const lcs::Problem& src, const std::vector<Con
       for (int a = 0; a < n; ++a) W(a, b) = (*dense)(keep_rows[a], keep_rows[b]);
     out.W = std::move(W);
   } else {
-    const lcs::BlockSparseMatrix& S = std::get<lcs::BlockSparseMatrix>(src.W);
-    lcs::BlockSparseMatrix T = lcs::BlockSparseMatrix::withBlockSizes(sizes);
+    const lcs::core::BlockSparseMatrix& S = std::get<lcs::core::BlockSparseMatrix>(src.W);
+    lcs::core::BlockSparseMatrix T = lcs::core::BlockSparseMatrix::withBlockSizes(sizes);
     for (int i = 0; i < nc; ++i) {
       T.beginRow();
       const int ri = src.contacts[i].rows;
@@ -132,7 +132,7 @@ inline lcs::Problem deriveProblem(const lcs::Problem& src, const std::vector<Con
 }
 
 // Every contact the same model.
-inline lcs::Problem deriveUniform(const lcs::Problem& src, const ContactModel& m) {
+inline lcs::core::Problem deriveUniform(const lcs::core::Problem& src, const ContactModel& m) {
   return deriveProblem(src, std::vector<ContactModel>(src.contacts.size(), m));
 }
 
@@ -158,25 +158,25 @@ struct SweepAcc {
   double best_short = std::numeric_limits<double>::infinity();
   double best_long = std::numeric_limits<double>::infinity();
   int it_short = 0, it_long = 0;
-  lcs::SolveResult result;  // of the fastest long run
+  lcs::core::SolveResult result;  // of the fastest long run
 };
 
-inline void sweepRound(const lcs::Problem& problem, lcs::SolverParams params, int sweeps, SweepAcc* acc,
+inline void sweepRound(const lcs::core::Problem& problem, lcs::core::SolverParams params, int sweeps, SweepAcc* acc,
                        double min_total = 0.02, int min_pairs = 2, int warm = 5) {
-  params.stopping_rule = lcs::StoppingRule::kSofa;
+  params.stopping_rule = lcs::core::StoppingRule::kSofa;
   params.tolerance = 1e-300;
   params.time_budget = 0.0;
   params.initial_guess = false;
-  lcs::SolverParams short_params = params, long_params = params;
+  lcs::core::SolverParams short_params = params, long_params = params;
   short_params.maxIt = warm;
   long_params.maxIt = warm + sweeps;
   double total = 0.0;
   for (int k = 0; k < min_pairs || (total < min_total && k < 2000); ++k) {
     double c0 = threadCpuSeconds();
-    lcs::SolveResult a = lcs::solveProblem(problem, short_params);
+    lcs::core::SolveResult a = lcs::core::solveProblem(problem, short_params);
     const double ts = threadCpuSeconds() - c0;
     c0 = threadCpuSeconds();
-    lcs::SolveResult b = lcs::solveProblem(problem, long_params);
+    lcs::core::SolveResult b = lcs::core::solveProblem(problem, long_params);
     const double tl = threadCpuSeconds() - c0;
     total += ts + tl;
     acc->best_short = std::min(acc->best_short, ts);
@@ -195,7 +195,7 @@ struct SweepTiming {
   double setup = std::numeric_limits<double>::quiet_NaN();      // s
   int sweeps = 0;        // of the long run
   std::string solver;    // what ran
-  lcs::SolveResult result;
+  lcs::core::SolveResult result;
 };
 
 inline SweepTiming sweepTiming(const SweepAcc& acc) {
@@ -223,9 +223,9 @@ void interleavedRounds(int rounds, std::size_t variants, Measure&& measure) {
 
 // Parameters of a cold solve to `tolerance` (no warm start), capped by `time_budget` s and
 // `max_iterations`, for solveRound.
-inline lcs::SolverParams toleranceParams(lcs::SolverKind solver, double tolerance, double time_budget,
+inline lcs::core::SolverParams toleranceParams(lcs::core::SolverKind solver, double tolerance, double time_budget,
                                          int max_iterations) {
-  lcs::SolverParams params;
+  lcs::core::SolverParams params;
   params.solver = solver;
   params.tolerance = tolerance;
   params.maxIt = max_iterations;
@@ -240,17 +240,17 @@ struct SolveAcc {
   double best = std::numeric_limits<double>::infinity();  // s CPU
   double wall = std::numeric_limits<double>::infinity();  // s wall of that run
   int runs = 0;
-  lcs::SolveResult result;
+  lcs::core::SolveResult result;
 };
 
-inline void solveRound(const lcs::Problem& problem, const lcs::SolverParams& params, SolveAcc* acc,
+inline void solveRound(const lcs::core::Problem& problem, const lcs::core::SolverParams& params, SolveAcc* acc,
                        double min_total = 0.01, double single_run = 0.3) {
   if (acc->runs > 0 && acc->best > single_run) return;
   double total = 0.0;
   do {
     const double c0 = threadCpuSeconds();
     const auto t0 = Clock::now();
-    lcs::SolveResult r = lcs::solveProblem(problem, params);
+    lcs::core::SolveResult r = lcs::core::solveProblem(problem, params);
     const double w = secondsSince(t0);
     const double s = threadCpuSeconds() - c0;
     total += s;

@@ -36,7 +36,7 @@ int main() {
       for (int round = 0; round < 5; ++round) {
         auto t0 = std::chrono::steady_clock::now();
         for (int k = 0; k < 20; ++k) {
-          lcs::Problem p;
+          lcs::core::Problem p;
           std::vector<lcp_contact_solver_ros::ContactFrame> frames;
           const std::string err = lcp_contact_solver_ros::toProblem(a, w, 0, &p, &frames, validate);
           if (!err.empty()) { std::printf("error: %s\n", err.c_str()); return 1; }

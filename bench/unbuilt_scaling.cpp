@@ -44,16 +44,16 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 struct Timing {
   double total = 0.0;  // best of 3, s
-  lcs::SolveResult result;
+  lcs::core::SolveResult result;
 };
 
-Timing timeSolve(const lcs::Problem& problem, lcs::SolverParams params, int sweeps) {
+Timing timeSolve(const lcs::core::Problem& problem, lcs::core::SolverParams params, int sweeps) {
   params.maxIt = sweeps;
   Timing t;
   t.total = 1e300;
   for (int rep = 0; rep < 3; ++rep) {
     const auto t0 = Clock::now();
-    lcs::SolveResult r = lcs::solveProblem(problem, params);
+    lcs::core::SolveResult r = lcs::core::solveProblem(problem, params);
     const double s = seconds(t0, Clock::now());
     if (s < t.total) {
       t.total = s;
@@ -63,13 +63,13 @@ Timing timeSolve(const lcs::Problem& problem, lcs::SolverParams params, int swee
   return t;
 }
 
-std::size_t bytesOf(const lcs::BlockSparseMatrix& W) {
+std::size_t bytesOf(const lcs::core::BlockSparseMatrix& W) {
   return W.values.size() * sizeof(double) +
          (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) * sizeof(int);
 }
 
-std::size_t bytesOf(const lcs::BodyCompliance& B) {
-  return B.body_compliance.size() * sizeof(lcs::BodyMatrix) + B.contacts.size() * sizeof(lcs::ContactJacobian);
+std::size_t bytesOf(const lcs::core::BodyCompliance& B) {
+  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) + B.contacts.size() * sizeof(lcs::core::ContactJacobian);
 }
 
 double relDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
@@ -111,9 +111,9 @@ int main(int argc, char** argv) {
   out << "problem,bodies,contacts,rows,form,compliance_bytes,assemble_ms,setup_ms,sweep_us,sweep_us_per_row,"
          "max_rel_diff_vs_block_sparse\n";
 
-  lcs::SolverParams params;
-  params.solver = lcs::SolverKind::kNlgs;
-  params.stopping_rule = lcs::StoppingRule::kSofa;
+  lcs::core::SolverParams params;
+  params.solver = lcs::core::SolverKind::kNlgs;
+  params.stopping_rule = lcs::core::StoppingRule::kSofa;
   params.tolerance = 1e-300;  // never reached: every run does exactly maxIt sweeps
   params.initial_guess = false;
   const int warm = 10;
@@ -123,33 +123,33 @@ int main(int argc, char** argv) {
   std::cerr << "generated " << problems.size() << " problems in " << seconds(t_gen, Clock::now()) << " s\n";
 
   for (const lcs_bench::SceneProblem& sp : problems) {
-    const lcs::Problem& bodies = sp.body_form;
+    const lcs::core::Problem& bodies = sp.body_form;
     const int rows = bodies.rowCount(), nc = static_cast<int>(bodies.contacts.size());
     if (nc == 0) continue;
     // The built forms, from the same body form (the scene's own block-sparse W equals it to
     // round-off; assembling here times it).
     auto t0 = Clock::now();
-    lcs::Problem sparse = bodies;
+    lcs::core::Problem sparse = bodies;
     sparse.bodies.reset();
     sparse.W = bodies.bodies->assemble();
     const double assemble_sparse = seconds(t0, Clock::now());
 
     struct Row {
       std::string form;
-      const lcs::Problem* problem;
+      const lcs::core::Problem* problem;
       bool build_lcp;
       std::size_t bytes;
       double assemble;
     };
     std::vector<Row> forms = {
-        {"block_sparse", &sparse, true, bytesOf(std::get<lcs::BlockSparseMatrix>(sparse.W)), assemble_sparse},
+        {"block_sparse", &sparse, true, bytesOf(std::get<lcs::core::BlockSparseMatrix>(sparse.W)), assemble_sparse},
         {"unbuilt", &bodies, false, bytesOf(*bodies.bodies), 0.0},
     };
-    lcs::Problem dense;
+    lcs::core::Problem dense;
     if (rows <= dense_max_rows) {
       t0 = Clock::now();
       dense = sparse;
-      dense.W = std::get<lcs::BlockSparseMatrix>(sparse.W).toDense();
+      dense.W = std::get<lcs::core::BlockSparseMatrix>(sparse.W).toDense();
       forms.insert(forms.begin(), Row{"dense", &dense, true, static_cast<std::size_t>(rows) * rows * sizeof(double),
                                       assemble_sparse + seconds(t0, Clock::now())});
     }
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> lines;
     std::vector<Eigen::VectorXd> forces;
     for (const Row& f : forms) {
-      lcs::SolverParams p = params;
+      lcs::core::SolverParams p = params;
       p.build_lcp = f.build_lcp;
       const Timing short_run = timeSolve(*f.problem, p, warm);
       const Timing long_run = timeSolve(*f.problem, p, warm + sweeps);
@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
       lines.push_back(line);
       forces.push_back(long_run.result.forces);
       if (f.form == "block_sparse") reference = long_run.result.forces;
-      std::cerr << line << " (" << lcs::statusName(long_run.result.status) << ")\n";
+      std::cerr << line << " (" << lcs::core::statusName(long_run.result.status) << ")\n";
     }
     for (std::size_t k = 0; k < lines.size(); ++k) out << lines[k] << relDiff(forces[k], reference) << "\n";
     out.flush();

@@ -50,17 +50,17 @@ using lcs_bench::SweepKind;
 
 namespace lcs_bench {
 
-bool isFc3d(const lcs::Problem& problem) {
+bool isFc3d(const lcs::core::Problem& problem) {
   if (problem.contacts.empty()) return false;
-  for (const lcs::Contact& c : problem.contacts)
-    if (c.type != lcs::ContactType::kFrictional || c.rows != 3) return false;
+  for (const lcs::core::Contact& c : problem.contacts)
+    if (c.type != lcs::core::ContactType::kFrictional || c.rows != 3) return false;
   return true;
 }
 
-bool isLcp(const lcs::Problem& problem) {
+bool isLcp(const lcs::core::Problem& problem) {
   if (problem.contacts.empty()) return false;
-  for (const lcs::Contact& c : problem.contacts)
-    if (c.type != lcs::ContactType::kFrictionless) return false;
+  for (const lcs::core::Contact& c : problem.contacts)
+    if (c.type != lcs::core::ContactType::kFrictionless) return false;
   return true;
 }
 
@@ -93,40 +93,40 @@ struct Options {
 struct BenchProblem {
   std::string family;
   std::string name;
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::string note;
 };
 
 // ---- the residual of every answer ---------------------------------------------------------
 
-double discResidual(const lcs::Problem& problem, const Eigen::VectorXd& forces) {
+double discResidual(const lcs::core::Problem& problem, const Eigen::VectorXd& forces) {
   if (forces.size() != problem.rowCount() || !forces.allFinite()) return std::numeric_limits<double>::infinity();
   Eigen::VectorXd d;
-  lcs::multiply(problem.W, forces, d);
+  lcs::core::multiply(problem.W, forces, d);
   d += problem.d_free;
-  return lcs::naturalMapResidual(problem, lcs::effectiveMu(problem, 0.6), forces, d);
+  return lcs::core::naturalMapResidual(problem, lcs::core::effectiveMu(problem, 0.6), forces, d);
 }
 
 // Natural map of the box friction model that Bullet solves: normal row as a unilateral row,
 // each tangent row boxed in [-mu max(λn, 0), mu max(λn, 0)] with the normal force fixed.
-double boxResidual(const lcs::Problem& problem, const Eigen::VectorXd& forces) {
+double boxResidual(const lcs::core::Problem& problem, const Eigen::VectorXd& forces) {
   if (forces.size() != problem.rowCount() || !forces.allFinite()) return std::numeric_limits<double>::infinity();
   Eigen::VectorXd d;
-  lcs::multiply(problem.W, forces, d);
+  lcs::core::multiply(problem.W, forces, d);
   d += problem.d_free;
-  const std::vector<double> mu = lcs::effectiveMu(problem, 0.6);
+  const std::vector<double> mu = lcs::core::effectiveMu(problem, 0.6);
   const std::vector<int> off = problem.rowOffsets();
   double sum = 0.0;
   for (std::size_t c = 0; c < problem.contacts.size(); ++c) {
-    const lcs::Contact& contact = problem.contacts[c];
+    const lcs::core::Contact& contact = problem.contacts[c];
     const int o = off[c];
-    if (contact.type == lcs::ContactType::kBilateral) {
+    if (contact.type == lcs::core::ContactType::kBilateral) {
       for (int k = 0; k < contact.rows; ++k) sum += d[o + k] * d[o + k];
       continue;
     }
     const double en = forces[o] - std::max(0.0, forces[o] - d[o]);
     sum += en * en;
-    if (contact.type == lcs::ContactType::kFrictional) {
+    if (contact.type == lcs::core::ContactType::kFrictional) {
       const double limit = mu[c] * std::max(0.0, forces[o]);
       for (int k = 1; k < 3; ++k) {
         const double et = forces[o + k] - std::clamp(forces[o + k] - d[o + k], -limit, limit);
@@ -142,8 +142,8 @@ double boxResidual(const lcs::Problem& problem, const Eigen::VectorXd& forces) {
 
 struct OurSolver {
   std::string name;
-  lcs::SolverKind kind;
-  lcs::FrictionModel model = lcs::FrictionModel::kCoulombDisc;
+  lcs::core::SolverKind kind;
+  lcs::core::FrictionModel model = lcs::core::FrictionModel::kCoulombDisc;
   double sor = 1.0;
   bool direct = false;       // one setting, no tolerance (Lemke)
   bool friction = true;      // runs on fc3d / scenes
@@ -152,8 +152,8 @@ struct OurSolver {
 };
 
 std::vector<OurSolver> ourSolvers() {
-  using K = lcs::SolverKind;
-  using F = lcs::FrictionModel;
+  using K = lcs::core::SolverKind;
+  using F = lcs::core::FrictionModel;
   return {
       {"auto", K::kAuto},
       {"nlgs", K::kNlgs, F::kCoulombDisc, 1.0, false, true, false},
@@ -267,7 +267,7 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
       writeRow(csv, skippedRow(row, "skipped"));
       continue;
     }
-    lcs::SolverParams params;
+    lcs::core::SolverParams params;
     params.solver = s.kind;
     params.friction_model = s.model;
     params.sor = s.sor;
@@ -275,13 +275,13 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
     params.maxIt = s.direct ? 1000000 : 10000000;
     params.time_budget = opt.budget;
     params.initial_guess = false;
-    lcs::SolveResult result;
+    lcs::core::SolveResult result;
     timeRepeated(opt, [&] {
       const auto t0 = Clock::now();
-      result = lcs::solveProblem(bp.problem, params);
+      result = lcs::core::solveProblem(bp.problem, params);
       return std::chrono::duration<double>(Clock::now() - t0).count();
     }, &row);
-    row.status = lcs::statusName(result.status);
+    row.status = lcs::core::statusName(result.status);
     row.converged = result.converged;
     row.iterations = result.iterations;
     row.residual = result.residual;
@@ -290,12 +290,12 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
     if (std::abs(check - result.residual) > 1e-9 * std::max(1.0, check))
       std::cerr << "warning: " << bp.name << " " << s.name << ": core residual " << result.residual
                 << " vs recomputed " << check << "\n";
-    row.model_residual = result.friction_model == lcs::FrictionModel::kCoulombDisc ? result.residual
+    row.model_residual = result.friction_model == lcs::core::FrictionModel::kCoulombDisc ? result.residual
                                                                                   : result.solver_error;
     writeRow(csv, row);
     // auto changes its kernel with the tolerance, so a failure at one setting says nothing
     // about the next.
-    if (failedSetting(row) && s.kind != lcs::SolverKind::kAuto) skip = true;
+    if (failedSetting(row) && s.kind != lcs::core::SolverKind::kAuto) skip = true;
   }
 }
 
@@ -532,7 +532,7 @@ std::vector<BenchProblem> loadProblems(const Options& opt) {
       bp.family = family;
       bp.name = baseName(path);
       try {
-        bp.problem = lcs::readProblemFile(path);
+        bp.problem = lcs::core::readProblemFile(path);
       } catch (const std::exception& e) {
         std::cerr << "skipping " << path << ": " << e.what() << "\n";
         continue;

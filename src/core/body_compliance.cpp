@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -181,4 +181,4 @@ void multiplyCompliance(const Problem& problem, const Eigen::VectorXd& x, Eigen:
   }
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

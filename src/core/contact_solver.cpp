@@ -2,7 +2,7 @@
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/islands.h"
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/core/stabilization.h"
 
@@ -13,7 +13,7 @@
 #include <memory>
 #include <sstream>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // ---- SolveContext ---------------------------------------------------------------------------
 
@@ -834,4 +834,4 @@ const char* stateName(ContactState state) {
   return "unknown";
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -16,7 +16,7 @@
 #include <unordered_map>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -409,4 +409,4 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
   return out;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

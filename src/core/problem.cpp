@@ -7,7 +7,7 @@
 #include <sstream>
 #include <unordered_set>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 int rowsForType(ContactType type) {
   switch (type) {
@@ -310,4 +310,4 @@ std::string validateProblem(const Problem& problem, int max_rows) {
   return "";
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

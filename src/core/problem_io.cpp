@@ -21,7 +21,7 @@ extern "C" {
 #include <string_view>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // Larger problems are refused before anything is allocated for them: a corrupt or hostile
@@ -687,4 +687,4 @@ Problem readProblemFile(const std::string& path) {
   return hasHdf5Signature(path) ? readFclibHdf5(path) : readSiconosDat(path);
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

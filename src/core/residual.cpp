@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -185,4 +185,4 @@ std::vector<ContactState> classifyContacts(const Problem& problem, const std::ve
   return states;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

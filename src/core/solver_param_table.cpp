@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -191,4 +191,4 @@ std::string paramText(const SolverParams& p, const std::string& name) {
   return "";
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

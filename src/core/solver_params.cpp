@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -133,4 +133,4 @@ std::string validateParams(const SolverParams& p) {
   return "";
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

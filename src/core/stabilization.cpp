@@ -5,7 +5,7 @@
 #include <memory>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -169,4 +169,4 @@ void StabilizationUndo::restore(Problem* problem) const {
   if (bodies_changed) problem->bodies = bodies;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -202,12 +202,12 @@ bool ContactSolverNode::onSolveService(lcp_contact_solver::SolveContacts::Reques
     response.stats = rejectedStatsMsg(request.contacts.header, SolverStats::INVALID_INPUT, message);
     return true;  // the call itself succeeded; the reply says what was wrong
   };
-  lcs::SolverParams params = latestSettings().solver;
+  lcs::core::SolverParams params = latestSettings().solver;
   for (const std::string& assignment : request.param_overrides) {
     const std::string error = applyOverride(assignment, &params);
     if (!error.empty()) return fail(error);
   }
-  if (const std::string error = lcs::validateParams(params); !error.empty()) return fail(error);
+  if (const std::string error = lcs::core::validateParams(params); !error.empty()) return fail(error);
 
   // A fresh cycle solver: no warm start memory, the node's own one untouched.
   params.initial_guess = false;
@@ -298,12 +298,12 @@ void ContactSolverNode::applyAcceptedSettings() {
   active_ = next;
 }
 
-void ContactSolverNode::recordSolve(const lcs::SolveResult& result) {
+void ContactSolverNode::recordSolve(const lcs::core::SolveResult& result) {
   solve_rate_->solved();
   std::lock_guard<std::mutex> lock(health_mutex_);
   ++health_.solves;
   health_.last_residual = result.residual;
-  health_.last_status = lcs::statusName(result.status);
+  health_.last_status = lcs::core::statusName(result.status);
   health_.last_converged = result.converged;
   if (!result.converged) {
     ++health_.not_converged;
@@ -332,16 +332,16 @@ bool ContactSolverNode::publishForces(const std_msgs::Header& header, CycleOutpu
 }
 
 bool ContactSolverNode::publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                       const lcs::Problem& problem, const lcs::SolveResult& result) {
+                                       const lcs::core::Problem& problem, const lcs::core::SolveResult& result) {
   if (!shouldBuildMarkers(markers_pub_.getNumSubscribers())) return false;
-  const std::vector<double> mu = lcs::effectiveMu(problem, active_.solver.mu);
+  const std::vector<double> mu = lcs::core::effectiveMu(problem, active_.solver.mu);
   markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(
       buildMarkers(header, frames, problem, result, mu, active_.display)));
   return true;
 }
 
-void ContactSolverNode::logCycle(const lcs::Problem& problem, const lcs::SolveResult& result) {
-  ROS_INFO_STREAM(cycleSummary(problem, result, lcs::effectiveMu(problem, active_.solver.mu)));
+void ContactSolverNode::logCycle(const lcs::core::Problem& problem, const lcs::core::SolveResult& result) {
+  ROS_INFO_STREAM(cycleSummary(problem, result, lcs::core::effectiveMu(problem, active_.solver.mu)));
   if (!result.residual_history.empty()) {
     std::ostringstream history;
     for (double r : result.residual_history) history << ' ' << r;

@@ -4,9 +4,9 @@ namespace lcp_contact_solver_ros {
 
 using lcp_contact_solver::SolverStats;
 
-CycleSolver::CycleSolver(const lcs::SolverParams& params) : solver_(params) {}
+CycleSolver::CycleSolver(const lcs::core::SolverParams& params) : solver_(params) {}
 
-std::string CycleSolver::setParams(const lcs::SolverParams& params) { return solver_.setParams(params); }
+std::string CycleSolver::setParams(const lcs::core::SolverParams& params) { return solver_.setParams(params); }
 
 CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
                                const lcp_contact_solver::Compliance& compliance, bool build_forces) {
@@ -16,7 +16,7 @@ CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
                         /*validate=*/false);
   if (out.error.empty()) {
     out.result = solver_.solveInPlace(out.problem);  // erp/softness without a copy of W
-    if (out.result.status == lcs::SolveStatus::kInvalidInput)  // refused by the core's own checks
+    if (out.result.status == lcs::core::SolveStatus::kInvalidInput)  // refused by the core's own checks
       out.error = out.result.message.empty() ? "invalid input" : out.result.message;
   }
   if (out.rejected()) {

@@ -39,7 +39,7 @@ visualization_msgs::Marker baseMarker(const std_msgs::Header& header, const char
 }
 
 visualization_msgs::Marker contactPoints(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                         const lcs::SolveResult& result, const DisplayOptions& options) {
+                                         const lcs::core::SolveResult& result, const DisplayOptions& options) {
   auto m = baseMarker(header, kNsContactPoints, 0, visualization_msgs::Marker::SPHERE_LIST, options);
   const double size = 0.2 * options.cone_height;
   m.scale.x = m.scale.y = m.scale.z = size;
@@ -63,7 +63,7 @@ visualization_msgs::Marker normals(const std_msgs::Header& header, const std::ve
 }
 
 void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                    const lcs::Problem& problem, const lcs::SolveResult& result, const DisplayOptions& options,
+                    const lcs::core::Problem& problem, const lcs::core::SolveResult& result, const DisplayOptions& options,
                     visualization_msgs::MarkerArray* markers) {
   const std::vector<int> offsets = problem.rowOffsets();
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -93,13 +93,13 @@ void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFra
 
 // Cones of admissible forces: apex at the contact, opening along the normal, radius μ h.
 visualization_msgs::Marker frictionCones(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                         const lcs::Problem& problem, const lcs::SolveResult& result,
+                                         const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
                                          const std::vector<double>& mu, const DisplayOptions& options) {
   auto m = baseMarker(header, kNsFrictionCones, 0, visualization_msgs::Marker::TRIANGLE_LIST, options);
   m.scale.x = m.scale.y = m.scale.z = 1.0;
   const double h = options.cone_height;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    if (!lcs::hasSlidingFriction(problem.contacts[i].type) || mu[i] <= 0.0) continue;
+    if (!lcs::core::hasSlidingFriction(problem.contacts[i].type) || mu[i] <= 0.0) continue;
     const ContactFrame& f = frames[i];
     std_msgs::ColorRGBA color = stateColor(result.states[i]);
     color.a = 0.4f;
@@ -136,11 +136,11 @@ visualization_msgs::Marker heatmap(const std_msgs::Header& header, const char* n
   return m;
 }
 
-void addHeatmaps(const std_msgs::Header& header, const lcs::Problem& problem, const lcs::SolveResult& result,
+void addHeatmaps(const std_msgs::Header& header, const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
                  const DisplayOptions& options, visualization_msgs::MarkerArray* markers) {
   if (!options.show_w_heatmap || options.showCellWidth <= 0.0) return;
   const int n = std::min(problem.rowCount(), options.heatmap_max_rows);
-  const Eigen::MatrixXd w = lcs::leadingComplianceWindow(problem, n);  // the leading n x n window (W or bodies)
+  const Eigen::MatrixXd w = lcs::core::leadingComplianceWindow(problem, n);  // the leading n x n window (W or bodies)
   markers->markers.push_back(heatmap(header, kNsComplianceHeatmap, w, 0, options));
   // λ as one column right of W, one empty column between.
   markers->markers.push_back(heatmap(header, kNsLambdaHeatmap, result.forces.head(n), n + 1, options));
@@ -149,13 +149,13 @@ void addHeatmaps(const std_msgs::Header& header, const lcs::Problem& problem, co
 }  // namespace
 
 // Saturated hues that the scene simulator's muted body palette does not use.
-std_msgs::ColorRGBA stateColor(lcs::ContactState state) {
+std_msgs::ColorRGBA stateColor(lcs::core::ContactState state) {
   switch (state) {
-    case lcs::ContactState::kOpen: return rgba(0.6f, 0.6f, 0.6f);
-    case lcs::ContactState::kStick: return rgba(0.1f, 1.0f, 0.1f);
-    case lcs::ContactState::kSlip: return rgba(1.0f, 0.0f, 0.0f);
-    case lcs::ContactState::kIgnored: return rgba(0.2f, 0.3f, 1.0f);
-    case lcs::ContactState::kClosed: return rgba(0.0f, 0.9f, 1.0f);
+    case lcs::core::ContactState::kOpen: return rgba(0.6f, 0.6f, 0.6f);
+    case lcs::core::ContactState::kStick: return rgba(0.1f, 1.0f, 0.1f);
+    case lcs::core::ContactState::kSlip: return rgba(1.0f, 0.0f, 0.0f);
+    case lcs::core::ContactState::kIgnored: return rgba(0.2f, 0.3f, 1.0f);
+    case lcs::core::ContactState::kClosed: return rgba(0.0f, 0.9f, 1.0f);
   }
   return rgba(1.0f, 0.0f, 1.0f);
 }
@@ -167,7 +167,7 @@ std_msgs::ColorRGBA heatColor(double value, double scale) {
 }
 
 visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                             const lcs::Problem& problem, const lcs::SolveResult& result,
+                                             const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
                                              const std::vector<double>& mu, const DisplayOptions& options) {
   visualization_msgs::MarkerArray markers;
   markers.markers.push_back(contactPoints(header, frames, result, options));

@@ -27,11 +27,11 @@ constexpr double kOrthogonalityTolerance = 1e-3;
 constexpr std::int64_t kHardRowLimit = 1000000;
 
 // toMsgType / fromMsgType are casts because the numbers agree; this keeps them agreeing.
-static_assert(static_cast<int>(lcs::ContactType::kFrictional) == lcs::ContactPoint::FRICTIONAL &&
-                  static_cast<int>(lcs::ContactType::kFrictionless) == lcs::ContactPoint::FRICTIONLESS &&
-                  static_cast<int>(lcs::ContactType::kBilateral) == lcs::ContactPoint::BILATERAL &&
-                  static_cast<int>(lcs::ContactType::kTorsional) == lcs::ContactPoint::TORSIONAL &&
-                  static_cast<int>(lcs::ContactType::kRolling) == lcs::ContactPoint::ROLLING,
+static_assert(static_cast<int>(lcs::core::ContactType::kFrictional) == lcs::ContactPoint::FRICTIONAL &&
+                  static_cast<int>(lcs::core::ContactType::kFrictionless) == lcs::ContactPoint::FRICTIONLESS &&
+                  static_cast<int>(lcs::core::ContactType::kBilateral) == lcs::ContactPoint::BILATERAL &&
+                  static_cast<int>(lcs::core::ContactType::kTorsional) == lcs::ContactPoint::TORSIONAL &&
+                  static_cast<int>(lcs::core::ContactType::kRolling) == lcs::ContactPoint::ROLLING,
               "ContactPoint's type constants must equal the core's ContactType values");
 
 std::string contactName(std::size_t index, std::int64_t id) {
@@ -45,7 +45,7 @@ int contactRows(const lcs::ContactPoint& c, std::string* error) {
     case lcs::ContactPoint::FRICTIONLESS:
     case lcs::ContactPoint::TORSIONAL:
     case lcs::ContactPoint::ROLLING: {
-      const int fixed = lcs::rowsForType(fromMsgType(c.type));  // the core's count: 3, 1, 4, 6
+      const int fixed = lcs::core::rowsForType(fromMsgType(c.type));  // the core's count: 3, 1, 4, 6
       if (c.rows != 0 && static_cast<int>(c.rows) != fixed) {
         *error = "has rows=" + std::to_string(c.rows) + " but its type has " + std::to_string(fixed);
         return -1;
@@ -81,7 +81,7 @@ std::string checkStabilization(const lcs::ContactPoint& msg) {
   return "";
 }
 
-std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
+std::string toCoreContact(const lcs::ContactPoint& msg, lcs::core::Contact* contact) {
   std::string error;
   const int rows = contactRows(msg, &error);
   if (rows < 0) return error;
@@ -106,7 +106,7 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::Contact* contact) {
   return "";
 }
 
-std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Problem* problem,
+std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::core::Problem* problem,
                          std::vector<ContactFrame>* frames) {
   if (msg.contacts.empty()) return "the contact array is empty";
   // Every contact has at least one row: refuse an array over the limit before allocating
@@ -141,7 +141,7 @@ std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::Proble
   return "";
 }
 
-std::string readDense(const lcs::Compliance& msg, int rows, lcs::ComplianceMatrix* W) {
+std::string readDense(const lcs::Compliance& msg, int rows, lcs::core::ComplianceMatrix* W) {
   const std::size_t expected = static_cast<std::size_t>(rows) * static_cast<std::size_t>(rows);
   if (msg.data.size() != expected)
     return "dense compliance has " + std::to_string(msg.data.size()) + " values, " +
@@ -152,7 +152,7 @@ std::string readDense(const lcs::Compliance& msg, int rows, lcs::ComplianceMatri
 }
 
 std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& offsets,
-                            lcs::ComplianceMatrix* W) {
+                            lcs::core::ComplianceMatrix* W) {
   const std::size_t nb = offsets.size() - 1;
   const std::size_t blocks = msg.block_rows.size();
   if (msg.block_cols.size() != blocks)
@@ -190,7 +190,7 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
            " block_data values, its blocks need " + std::to_string(start[blocks]);
   // The CSR arrays written in place: one copy of each block's values, no per-value append;
   // in message order that copy is the whole of block_data at once (no zero fill first).
-  lcs::BlockSparseMatrix sparse = lcs::BlockSparseMatrix::withBlockSizes(sizes);
+  lcs::core::BlockSparseMatrix sparse = lcs::core::BlockSparseMatrix::withBlockSizes(sizes);
   sparse.row_start.assign(nb + 1, 0);
   sparse.block_col.resize(blocks);
   sparse.value_start.resize(blocks);
@@ -223,7 +223,7 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
 // The body form: every size is checked against the contacts before anything is allocated;
 // finiteness is checked by validateProblem (BodyCompliance::validate) afterwards.
 std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offsets,
-                       std::shared_ptr<const lcs::BodyCompliance>* out) {
+                       std::shared_ptr<const lcs::core::BodyCompliance>* out) {
   const std::size_t nc = offsets.size() - 1;
   if (msg.body_compliance.size() % 36 != 0)
     return "the body form has " + std::to_string(msg.body_compliance.size()) +
@@ -248,18 +248,18 @@ std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offse
   if (!msg.body_diagonal.empty() && msg.body_diagonal.size() != static_cast<std::size_t>(offsets.back()))
     return "the body form has " + std::to_string(msg.body_diagonal.size()) + " body_diagonal values, " +
            std::to_string(offsets.back()) + " rows (or none) expected";
-  auto bodies = std::make_shared<lcs::BodyCompliance>();
+  auto bodies = std::make_shared<lcs::core::BodyCompliance>();
   bodies->body_compliance.resize(nb);
   using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
   for (std::size_t b = 0; b < nb; ++b) bodies->body_compliance[b] = Eigen::Map<const RowMajor6>(msg.body_compliance.data() + 36 * b);
   bodies->contacts.resize(nc);
   std::size_t next = 0;
   for (std::size_t i = 0; i < nc; ++i) {
-    lcs::ContactJacobian& c = bodies->contacts[i];
+    lcs::core::ContactJacobian& c = bodies->contacts[i];
     c.rows = offsets[i + 1] - offsets[i];
     c.body_a = msg.contact_bodies[2 * i];
     c.body_b = msg.contact_bodies[2 * i + 1];
-    for (lcs::JacobianBlock* J : {&c.jacobian_a, &c.jacobian_b}) {
+    for (lcs::core::JacobianBlock* J : {&c.jacobian_a, &c.jacobian_b}) {
       if ((J == &c.jacobian_a ? c.body_a : c.body_b) < 0) continue;
       J->resize(c.rows, 6);
       for (int k = 0; k < c.rows * 6; ++k) J->data()[k] = msg.jacobian[next++];  // row-major, as stored
@@ -272,7 +272,7 @@ std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offse
 }
 
 std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& offsets,
-                           lcs::ComplianceMatrix* W, std::shared_ptr<const lcs::BodyCompliance>* bodies) {
+                           lcs::core::ComplianceMatrix* W, std::shared_ptr<const lcs::core::BodyCompliance>* bodies) {
   const int rows = offsets.back();
   if (static_cast<std::int64_t>(msg.rows) != rows)
     return "the compliance has rows=" + std::to_string(msg.rows) + ", the contacts have " + std::to_string(rows);
@@ -285,7 +285,7 @@ std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& o
 }
 
 // Up to three rows of a contact along (n, t1, t2); later bilateral rows have no direction.
-Eigen::Vector3d directionalForce(const lcs::Contact& contact, const double* lambda) {
+Eigen::Vector3d directionalForce(const lcs::core::Contact& contact, const double* lambda) {
   Eigen::Vector3d components = Eigen::Vector3d::Zero();
   for (int k = 0; k < std::min(3, contact.rows); ++k) components[k] = lambda[k];
   return components;
@@ -293,12 +293,12 @@ Eigen::Vector3d directionalForce(const lcs::Contact& contact, const double* lamb
 
 }  // namespace
 
-std::uint8_t toMsgType(lcs::ContactType type) { return static_cast<std::uint8_t>(type); }
+std::uint8_t toMsgType(lcs::core::ContactType type) { return static_cast<std::uint8_t>(type); }
 
-lcs::ContactType fromMsgType(std::uint8_t type) { return static_cast<lcs::ContactType>(type); }
+lcs::core::ContactType fromMsgType(std::uint8_t type) { return static_cast<lcs::core::ContactType>(type); }
 
 void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2) {
-  lcs::tangentsFromNormal(normal, tangent1, tangent2);
+  lcs::core::tangentsFromNormal(normal, tangent1, tangent2);
 }
 
 std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame) {
@@ -328,23 +328,23 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 }
 
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
-  *problem = lcs::Problem();
+                      int max_rows, lcs::core::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
+  *problem = lcs::core::Problem();
   std::string error = readContacts(contacts, max_rows, problem, frames);
   if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W, &problem->bodies);
-  if (error.empty() && validate) error = lcs::validateProblem(*problem, max_rows);  // non-finite W, d_free
+  if (error.empty() && validate) error = lcs::core::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
 }
 
-lcs::ContactArray toContactArrayMsg(const lcs::Problem& problem, const std::vector<ContactFrame>& frames,
+lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem, const std::vector<ContactFrame>& frames,
                                     const std::vector<ContactBodies>& bodies, const std_msgs::Header& header) {
   lcs::ContactArray msg;
   msg.header = header;
   const std::vector<int> offsets = problem.rowOffsets();
   msg.contacts.resize(problem.contacts.size());
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const lcs::Contact& c = problem.contacts[i];
+    const lcs::core::Contact& c = problem.contacts[i];
     const ContactFrame& f = frames[i];
     lcs::ContactPoint& out = msg.contacts[i];
     out.id = c.id;
@@ -369,9 +369,9 @@ lcs::ContactArray toContactArrayMsg(const lcs::Problem& problem, const std::vect
   return msg;
 }
 
-lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {
+lcs::Compliance toComplianceMsg(const lcs::core::ComplianceMatrix& W) {
   lcs::Compliance msg;
-  msg.rows = static_cast<std::uint32_t>(lcs::complianceRows(W));
+  msg.rows = static_cast<std::uint32_t>(lcs::core::complianceRows(W));
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
     msg.storage = lcs::Compliance::STORAGE_DENSE;
     msg.data.reserve(dense->size());
@@ -379,7 +379,7 @@ lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {
       for (Eigen::Index c = 0; c < dense->cols(); ++c) msg.data.push_back((*dense)(r, c));
     return msg;
   }
-  const auto& sparse = std::get<lcs::BlockSparseMatrix>(W);
+  const auto& sparse = std::get<lcs::core::BlockSparseMatrix>(W);
   msg.storage = lcs::Compliance::STORAGE_BLOCK_SPARSE;
   for (int i = 0; i < sparse.blockCount(); ++i) {
     for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
@@ -391,17 +391,17 @@ lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W) {
   return msg;
 }
 
-lcs::Compliance toComplianceMsg(const lcs::Problem& problem) {
+lcs::Compliance toComplianceMsg(const lcs::core::Problem& problem) {
   if (!problem.bodies) return toComplianceMsg(problem.W);
-  const lcs::BodyCompliance& bodies = *problem.bodies;
+  const lcs::core::BodyCompliance& bodies = *problem.bodies;
   lcs::Compliance msg;
   msg.storage = lcs::Compliance::STORAGE_BODIES;
   msg.rows = static_cast<std::uint32_t>(bodies.rowCount());
   msg.body_compliance.reserve(36 * bodies.body_compliance.size());
-  for (const lcs::BodyMatrix& C : bodies.body_compliance)
+  for (const lcs::core::BodyMatrix& C : bodies.body_compliance)
     for (int r = 0; r < 6; ++r)
       for (int c = 0; c < 6; ++c) msg.body_compliance.push_back(C(r, c));
-  for (const lcs::ContactJacobian& c : bodies.contacts) {
+  for (const lcs::core::ContactJacobian& c : bodies.contacts) {
     msg.contact_bodies.push_back(c.body_a);
     msg.contact_bodies.push_back(c.body_b);
     if (c.body_a >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_a.data(), c.jacobian_a.data() + 6 * c.rows);
@@ -413,14 +413,14 @@ lcs::Compliance toComplianceMsg(const lcs::Problem& problem) {
 
 lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
                                             const std::vector<ContactFrame>& frames,
-                                            const lcs::Problem& problem,
-                                            const lcs::SolveResult& result) {
+                                            const lcs::core::Problem& problem,
+                                            const lcs::core::SolveResult& result) {
   lcs::ConstraintForces msg;
   msg.header = contacts.header;
   const std::vector<int> offsets = problem.rowOffsets();
   msg.forces.resize(problem.contacts.size());
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const lcs::Contact& contact = problem.contacts[i];
+    const lcs::core::Contact& contact = problem.contacts[i];
     const ContactFrame& frame = frames[i];
     const double* lambda = result.forces.data() + offsets[i];
     const Eigen::Vector3d components = directionalForce(contact, lambda);
@@ -439,7 +439,7 @@ lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
     out.tangent1 = toVector3(frame.tangent1);
     out.tangent2 = toVector3(frame.tangent2);
     out.lambda.assign(lambda, lambda + contact.rows);
-    if (contact.type == lcs::ContactType::kTorsional || contact.type == lcs::ContactType::kRolling) {
+    if (contact.type == lcs::core::ContactType::kTorsional || contact.type == lcs::core::ContactType::kRolling) {
       Eigen::Vector3d torque = frame.normal * lambda[3];
       if (contact.rows == 6) torque += frame.tangent1 * lambda[4] + frame.tangent2 * lambda[5];
       out.torque = toVector3(torque);
@@ -499,16 +499,16 @@ std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::Cont
   return wrenches;
 }
 
-lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::Problem& problem,
-                            const lcs::SolveResult& result) {
+lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::core::Problem& problem,
+                            const lcs::core::SolveResult& result) {
   lcs::SolverStats stats;
   stats.header = header;
   stats.success = solveGaveForces(result);
   stats.status_code = static_cast<std::uint8_t>(result.status);
-  stats.status = lcs::statusName(result.status);
+  stats.status = lcs::core::statusName(result.status);
   stats.message = result.message;
   stats.solver = result.solver;
-  stats.friction_model = lcs::frictionModelName(result.friction_model);
+  stats.friction_model = lcs::core::frictionModelName(result.friction_model);
   stats.iterations = result.iterations;
   stats.residual = result.residual;
   stats.solver_error = result.solver_error;
@@ -534,13 +534,13 @@ std::string statusCodeName(std::uint8_t status_code) {
   if (status_code == lcs::SolverStats::NO_COMPLIANCE) return "no_compliance";
   if (status_code == lcs::SolverStats::DROPPED) return "dropped";
   if (status_code < lcs::SolverStats::NO_COMPLIANCE)
-    return lcs::statusName(static_cast<lcs::SolveStatus>(status_code));  // "unknown" past the last
+    return lcs::core::statusName(static_cast<lcs::core::SolveStatus>(status_code));  // "unknown" past the last
   return "unknown";
 }
 
-bool solveGaveForces(const lcs::SolveResult& result) {
-  return result.status == lcs::SolveStatus::kConverged || result.status == lcs::SolveStatus::kMaxIterations ||
-         result.status == lcs::SolveStatus::kTimeBudget;
+bool solveGaveForces(const lcs::core::SolveResult& result) {
+  return result.status == lcs::core::SolveStatus::kConverged || result.status == lcs::core::SolveStatus::kMaxIterations ||
+         result.status == lcs::core::SolveStatus::kTimeBudget;
 }
 
 bool allFinite(const lcs::ConstraintForces& forces) {

@@ -42,7 +42,7 @@ lcs::Compliance toComplianceMsg(const scene::StepProblem& step, const std_msgs::
   return msg;
 }
 
-std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::Problem& problem, Eigen::VectorXd* lambda) {
+std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::core::Problem& problem, Eigen::VectorXd* lambda) {
   const std::vector<int> offsets = problem.rowOffsets();
   *lambda = Eigen::VectorXd::Zero(offsets.back());
   std::unordered_map<std::int64_t, std::size_t> index;

@@ -51,36 +51,36 @@ std::string readEnum(const ros::NodeHandle& pnh, const std::string& name, Overlo
 
 // Every parameter of the table present in `pnh`, read with its own type and set through
 // the table's parser (numbers as their exact text, so nothing is rounded).
-std::string readSolverParams(const ros::NodeHandle& pnh, lcs::SolverParams* p) {
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+std::string readSolverParams(const ros::NodeHandle& pnh, lcs::core::SolverParams* p) {
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
     if (!pnh.hasParam(spec.name)) continue;
     std::string text;
     bool read = false;
     switch (spec.type) {
-      case lcs::ParamType::kDouble: {
+      case lcs::core::ParamType::kDouble: {
         double v = 0.0;
         read = pnh.getParam(spec.name, v);
-        text = lcs::exactDoubleText(v);
+        text = lcs::core::exactDoubleText(v);
         break;
       }
-      case lcs::ParamType::kInt: {
+      case lcs::core::ParamType::kInt: {
         int v = 0;
         read = pnh.getParam(spec.name, v);
         text = std::to_string(v);
         break;
       }
-      case lcs::ParamType::kBool: {
+      case lcs::core::ParamType::kBool: {
         bool v = false;
         read = pnh.getParam(spec.name, v);
         text = v ? "true" : "false";
         break;
       }
-      case lcs::ParamType::kEnum:
+      case lcs::core::ParamType::kEnum:
         read = pnh.getParam(spec.name, text);
         break;
     }
-    if (!read) return "parameter " + pnh.resolveName(spec.name) + " must be " + lcs::expectedValue(spec);
-    if (const std::string why = lcs::setParam(p, spec.name, text); !why.empty())
+    if (!read) return "parameter " + pnh.resolveName(spec.name) + " must be " + lcs::core::expectedValue(spec);
+    if (const std::string why = lcs::core::setParam(p, spec.name, text); !why.empty())
       return "parameter " + pnh.resolveName(spec.name) + ": " + why;
   }
   return "";
@@ -101,9 +101,9 @@ std::string validateDisplay(const DisplayOptions& d) {
 
 }  // namespace
 
-lcs::SolverParams defaultSolverParams() {
-  lcs::SolverParams params;  // SOFA's defaults, then the node's own (node_param_defaults.def)
-#define LCS_NODE_DEFAULT(name, value) lcs::setParam(&params, #name, value);
+lcs::core::SolverParams defaultSolverParams() {
+  lcs::core::SolverParams params;  // SOFA's defaults, then the node's own (node_param_defaults.def)
+#define LCS_NODE_DEFAULT(name, value) lcs::core::setParam(&params, #name, value);
 #include "lcp_contact_solver/ros/node_param_defaults.def"
 #undef LCS_NODE_DEFAULT
   return params;
@@ -137,7 +137,7 @@ std::string loadSettings(const ros::NodeHandle& pnh, NodeSettings* s) {
 }
 
 std::string validateSettings(const NodeSettings& s) {
-  std::string error = lcs::validateParams(s.solver);
+  std::string error = lcs::core::validateParams(s.solver);
   if (error.empty()) error = validateDisplay(s.display);
   if (!error.empty()) return error;
   if (!positive(s.pairing_window)) return "pairing_window must be a finite number > 0 (s)";
@@ -149,15 +149,15 @@ std::string validateSettings(const NodeSettings& s) {
   return "";
 }
 
-std::string applyOverride(const std::string& assignment, lcs::SolverParams* params) {
-  const std::string error = lcs::applyAssignment(params, assignment, lcs::kParamOverride);
+std::string applyOverride(const std::string& assignment, lcs::core::SolverParams* params) {
+  const std::string error = lcs::core::applyAssignment(params, assignment, lcs::core::kParamOverride);
   return error.empty() ? "" : "override " + error;
 }
 
 std::vector<std::string> overridableNames() {
   std::vector<std::string> names;
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    if (spec.access & lcs::kParamOverride) names.push_back(spec.name);
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    if (spec.access & lcs::core::kParamOverride) names.push_back(spec.name);
   return names;
 }
 
@@ -175,7 +175,7 @@ void setField(Config* config, const Config::AbstractParamDescription& descriptio
 std::string fieldText(const Config& config, const Config::AbstractParamDescription& description) {
   boost::any value;
   description.getValue(config, value);
-  if (const double* v = boost::any_cast<double>(&value)) return lcs::exactDoubleText(*v);
+  if (const double* v = boost::any_cast<double>(&value)) return lcs::core::exactDoubleText(*v);
   if (const int* v = boost::any_cast<int>(&value)) return std::to_string(*v);
   if (const bool* v = boost::any_cast<bool>(&value)) return *v ? "true" : "false";
   if (const std::string* v = boost::any_cast<std::string>(&value)) return *v;
@@ -194,14 +194,14 @@ std::string fieldText(const Config& config, const Config::AbstractParamDescripti
 lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
   Config c = Config::__getDefault__();
   for (const auto& description : Config::__getParamDescriptions__()) {
-    const lcs::ParamSpec* spec = lcs::findSolverParam(description->name);
+    const lcs::core::ParamSpec* spec = lcs::core::findSolverParam(description->name);
     if (spec == nullptr) continue;
-    const std::string text = lcs::paramText(s.solver, spec->name);
+    const std::string text = lcs::core::paramText(s.solver, spec->name);
     switch (spec->type) {
-      case lcs::ParamType::kDouble: setField(&c, *description, std::strtod(text.c_str(), nullptr)); break;
-      case lcs::ParamType::kInt: setField(&c, *description, std::stoi(text)); break;
-      case lcs::ParamType::kBool: setField(&c, *description, text == "true"); break;
-      case lcs::ParamType::kEnum: setField(&c, *description, text); break;
+      case lcs::core::ParamType::kDouble: setField(&c, *description, std::strtod(text.c_str(), nullptr)); break;
+      case lcs::core::ParamType::kInt: setField(&c, *description, std::stoi(text)); break;
+      case lcs::core::ParamType::kBool: setField(&c, *description, text == "true"); break;
+      case lcs::core::ParamType::kEnum: setField(&c, *description, text); break;
     }
   }
   // The node's reconfigurable ones (node_param_table.def).
@@ -226,8 +226,8 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
 std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSettings* s) {
   NodeSettings next = *s;
   for (const auto& description : Config::__getParamDescriptions__()) {
-    if (lcs::findSolverParam(description->name) == nullptr) continue;
-    if (const std::string error = lcs::setParam(&next.solver, description->name, fieldText(c, *description));
+    if (lcs::core::findSolverParam(description->name) == nullptr) continue;
+    if (const std::string error = lcs::core::setParam(&next.solver, description->name, fieldText(c, *description));
         !error.empty())
       return error;
   }

@@ -63,7 +63,7 @@ RigidContactModel::RigidContactModel(const Scene& scene, const std::vector<Scene
   }
 }
 
-ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage storage) const {
+core::ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage storage) const {
   const int nc = contactCount();
   const double dt2 = dt * dt;
   // Block (i, j) = dt² Σ_{dynamic bodies b shared by i and j} J_ib M_b⁻¹ J_jbᵀ.
@@ -90,7 +90,7 @@ ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage stor
   }
   std::vector<int> sizes(nc);
   for (int i = 0; i < nc; ++i) sizes[i] = contacts_[i].rows;
-  BlockSparseMatrix W = BlockSparseMatrix::withBlockSizes(sizes);
+  core::BlockSparseMatrix W = core::BlockSparseMatrix::withBlockSizes(sizes);
   for (int i = 0; i < nc; ++i) {
     W.beginRow();
     for (int j : neighbours(i)) {
@@ -102,15 +102,15 @@ ComplianceMatrix RigidContactModel::compliance(double dt, ComplianceStorage stor
   return W;
 }
 
-BodyCompliance RigidContactModel::bodyCompliance(double dt) const {
-  BodyCompliance out;
+core::BodyCompliance RigidContactModel::bodyCompliance(double dt) const {
+  core::BodyCompliance out;
   const double dt2 = dt * dt;
   out.body_compliance.reserve(inverse_mass_.size());
   for (const Eigen::Matrix<double, 6, 6>& m : inverse_mass_) out.body_compliance.push_back(dt2 * m);
   out.contacts.resize(contacts_.size());
   for (std::size_t c = 0; c < contacts_.size(); ++c) {
     const ContactData& cd = contacts_[c];
-    ContactJacobian& cj = out.contacts[c];
+    core::ContactJacobian& cj = out.contacts[c];
     cj.rows = cd.rows;
     cj.body_a = cd.side[0].body;
     cj.body_b = cd.side[1].body;
@@ -188,8 +188,8 @@ Eigen::MatrixXd RigidContactModel::denseInverseMass() const {
   return M;
 }
 
-std::vector<Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames) {
-  std::vector<Contact> contacts(frames.size());
+std::vector<core::Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames) {
+  std::vector<core::Contact> contacts(frames.size());
   for (std::size_t c = 0; c < frames.size(); ++c) {
     contacts[c].id = frames[c].id;
     contacts[c].type = frames[c].type;
@@ -204,14 +204,14 @@ std::vector<Contact> problemContacts(const Scene& scene, const std::vector<Scene
   return contacts;
 }
 
-Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
+core::Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
                      const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage) {
   const RigidContactModel model(scene, frames);
-  Problem p;
+  core::Problem p;
   p.name = scene.name;
   p.contacts = problemContacts(scene, frames);
   if (storage == ComplianceStorage::kBodies) {
-    p.bodies = std::make_shared<const BodyCompliance>(model.bodyCompliance(dt));
+    p.bodies = std::make_shared<const core::BodyCompliance>(model.bodyCompliance(dt));
   } else {
     p.W = model.compliance(dt, storage);
   }

@@ -294,24 +294,24 @@ std::vector<SceneContact> ContactGenerator::generate() {
       f.body_b_name = B.name;
       f.position = points[i].point;
       f.normal = points[i].normal;
-      tangentsFromNormal(f.normal, &f.tangent1, &f.tangent2);
+      core::tangentsFromNormal(f.normal, &f.tangent1, &f.tangent2);
       f.depth = points[i].depth;
       // Only the rows the pair asks for (MuJoCo's condim 1 / 3 / 4 / 6).
       f.mu = model.mu;
       f.restitution = model.restitution;
       if (model.mu <= 0.0) {
-        f.type = ContactType::kFrictionless;
+        f.type = core::ContactType::kFrictionless;
       } else if (model.rolling > 0.0) {
-        f.type = ContactType::kRolling;
+        f.type = core::ContactType::kRolling;
         f.mu_torsional = model.torsional;
         f.mu_rolling = model.rolling;
       } else if (model.torsional > 0.0) {
-        f.type = ContactType::kTorsional;
+        f.type = core::ContactType::kTorsional;
         f.mu_torsional = model.torsional;
       } else {
-        f.type = ContactType::kFrictional;
+        f.type = core::ContactType::kFrictional;
       }
-      f.rows = rowsForType(f.type);
+      f.rows = core::rowsForType(f.type);
       f.point_local_a = local[i];
       frames.push_back(f);
       mem_next.contacts.push_back({slot[i], local[i]});

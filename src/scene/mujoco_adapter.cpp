@@ -302,7 +302,7 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
 
   std::vector<double> scale_of_row;
   std::vector<char> contact_counted(d->ncon, 0);
-  auto addEntry = [&](const MujocoEntry& entry, const Contact& contact, const std::vector<int>& efc_rows,
+  auto addEntry = [&](const MujocoEntry& entry, const core::Contact& contact, const std::vector<int>& efc_rows,
                       const std::vector<double>& scales) {
     out->entries.push_back(entry);
     out->problem.contacts.push_back(contact);
@@ -351,9 +351,9 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
           entry.body_a = bodyOfEqualityObject(m, id, m->eq_obj1id[id]);
           entry.body_b = bodyOfEqualityObject(m, id, m->eq_obj2id[id]);
           entry.position = vec3(d->xpos + 3 * entry.body_a);
-          Contact contact;
+          core::Contact contact;
           contact.id = mujocoEqualityId(id);
-          contact.type = ContactType::kBilateral;
+          contact.type = core::ContactType::kBilateral;
           contact.rows = k;
           contact.mu = 0.0;
           std::vector<int> efc_rows;
@@ -390,9 +390,9 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
             if (axis.norm() > 0.0) entry.normal = sign * axis.normalized();
           }
         }
-        Contact contact;
+        core::Contact contact;
         contact.id = mujocoLimitId(type, id);
-        contact.type = ContactType::kFrictionless;
+        contact.type = core::ContactType::kFrictionless;
         contact.rows = 1;
         contact.mu = 0.0;
         addEntry(entry, contact, {e}, {1.0});
@@ -402,9 +402,9 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
       case mjCNSTR_CONTACT_FRICTIONLESS: {
         if (id < 0 || id >= d->ncon) return "efc row " + std::to_string(e) + " names contact " + std::to_string(id) + " of " + std::to_string(d->ncon);
         MujocoEntry entry = contactEntry(id, MujocoRowKind::kFrictionless, e);
-        Contact contact;
+        core::Contact contact;
         contact.id = mujocoContactId(entry.geom1, entry.geom2, rank[id], -1);
-        contact.type = ContactType::kFrictionless;
+        contact.type = core::ContactType::kFrictionless;
         contact.rows = 1;
         contact.mu = 0.0;
         addEntry(entry, contact, {e}, {1.0});
@@ -431,9 +431,9 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
             if (options.scale_rows) s = edge.norm();
             entry.normal = edge.normalized();
           }  // torsion / rolling edges: a normal force with a torque; the normal is n
-          Contact contact;
+          core::Contact contact;
           contact.id = mujocoContactId(entry.geom1, entry.geom2, rank[id], k);
-          contact.type = ContactType::kFrictionless;
+          contact.type = core::ContactType::kFrictionless;
           contact.rows = 1;
           contact.mu = 0.0;
           addEntry(entry, contact, {e + k}, {s});
@@ -454,9 +454,9 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
         double s2 = 1.0;  // anisotropy: scale the second tangent so the cone is the disc of μ1
         if (options.scale_rows && con.friction[1] > 0.0 && con.friction[1] != con.friction[0])
           s2 = con.friction[0] / con.friction[1];
-        Contact contact;
+        core::Contact contact;
         contact.id = mujocoContactId(entry.geom1, entry.geom2, rank[id], -1);
-        contact.type = ContactType::kFrictional;
+        contact.type = core::ContactType::kFrictional;
         contact.rows = 3;
         contact.mu = con.friction[0];
         addEntry(entry, contact, {e, e + 1, e + 2}, {1.0, 1.0, s2});
@@ -515,7 +515,7 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
       sizes[i] = offsets[i + 1] - offsets[i];
       for (int p = offsets[i]; p < offsets[i + 1]; ++p) entry_of_row[p] = i;
     }
-    BlockSparseMatrix W = BlockSparseMatrix::withBlockSizes(sizes);
+    core::BlockSparseMatrix W = core::BlockSparseMatrix::withBlockSizes(sizes);
     std::vector<int> slot(nb, -1);  // block index of entry j within the current block row
     std::vector<int> cols;
     std::vector<Eigen::MatrixXd> blocks;
@@ -590,7 +590,7 @@ Eigen::Vector3d contactFrameForce(const MujocoProblem& problem, const Eigen::Vec
 // ---- comparison --------------------------------------------------------------------------
 
 ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorXd& lambda,
-                              const std::vector<ContactState>& states) {
+                              const std::vector<core::ContactState>& states) {
   ForceComparison cmp;
   const std::vector<int> offsets = problem.problem.rowOffsets();
   cmp.rows = static_cast<int>(problem.efc_row.size());
@@ -606,7 +606,7 @@ ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorX
     cmp.max_abs = std::max(cmp.max_abs, entry_max);
     if (i < states.size()) {
       const int s = static_cast<int>(states[i]);
-      if (s >= 0 && s < kContactStateCount) {
+      if (s >= 0 && s < core::kContactStateCount) {
         ++cmp.state_count[s];
         cmp.state_max_abs[s] = std::max(cmp.state_max_abs[s], entry_max);
       }
@@ -620,9 +620,9 @@ ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorX
 double problemResidual(const MujocoProblem& problem, const Eigen::VectorXd& lambda) {
   if (problem.problem.contacts.empty()) return 0.0;
   Eigen::VectorXd d;
-  multiply(problem.problem.W, lambda, d);
+  core::multiply(problem.problem.W, lambda, d);
   d += problem.problem.d_free;
-  return naturalMapResidual(problem.problem, effectiveMu(problem.problem, 0.0), lambda, d);
+  return core::naturalMapResidual(problem.problem, core::effectiveMu(problem.problem, 0.0), lambda, d);
 }
 
 }  // namespace scene

@@ -28,11 +28,11 @@ bool parseComplianceStorage(const std::string& name, ComplianceStorage* storage)
   return false;
 }
 
-SolverParams SceneParams::defaultSceneSolverParams() {
-  SolverParams p;
+core::SolverParams SceneParams::defaultSceneSolverParams() {
+  core::SolverParams p;
   // Closed-loop physics wants a converged answer every step; warm starting by contact id
   // makes a tight tolerance cheap for resting contacts.
-  p.solver = SolverKind::kAuto;
+  p.solver = core::SolverKind::kAuto;
   p.tolerance = 1e-9;
   p.maxIt = 5000;
   p.initial_guess = true;
@@ -104,7 +104,7 @@ std::string validateSceneParams(const SceneParams& p) {
   for (const auto& [link, v] : p.initial_velocities)
     if (!v.linear.allFinite() || !v.angular.allFinite()) return "initial_velocities." + link + " must be finite";
   if (!finite(p.duration) || p.duration < 0.0) return "duration must be >= 0 (s)";
-  if (std::string err = validateParams(p.solver); !err.empty()) return "solver: " + err;
+  if (std::string err = core::validateParams(p.solver); !err.empty()) return "solver: " + err;
   return "";
 }
 
@@ -279,14 +279,14 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
       for (const auto& kv2 : v) {
         // `name` is the solver's name here (the ROS parameter is `solver`).
         const std::string k = kv2.first.Scalar(), param = k == "name" ? "solver" : k;
-        if (k == "solver" || findSolverParam(param) == nullptr) {
+        if (k == "solver" || core::findSolverParam(param) == nullptr) {
           std::string list = "name";
-          for (const ParamSpec& spec : solverParamSpecs())
+          for (const core::ParamSpec& spec : core::solverParamSpecs())
             if (spec.name != "solver") list += ", " + spec.name;
           r.fail(key + "." + k, "unknown key (known: " + list + ")");
         }
-        if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + expectedValue(*findSolverParam(param)));
-        if (const std::string error = setParam(&p.solver, param, kv2.second.Scalar()); !error.empty())
+        if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + core::expectedValue(*core::findSolverParam(param)));
+        if (const std::string error = core::setParam(&p.solver, param, kv2.second.Scalar()); !error.empty())
           r.fail(key + "." + k, error);
       }
     }

@@ -85,7 +85,7 @@ void SceneSimulator::applyRestitution(double dt) {
   }
   const Eigen::VectorXd vn = model_->normalVelocities(v_now);
   const std::vector<int>& offsets = model_->rowOffsets();
-  Problem& p = problem_.problem;
+  core::Problem& p = problem_.problem;
   for (std::size_t c = 0; c < frames.size(); ++c) {
     const SceneContact& f = frames[c];
     if (f.restitution <= 0.0 || vn[c] >= -scene_.params.restitution_threshold) continue;
@@ -111,15 +111,15 @@ const StepProblem& SceneSimulator::buildStep(double dt) {
 
   v_free_ = freeVelocities(scene_, dt);
   model_ = std::make_unique<RigidContactModel>(scene_, problem_.frames);
-  Problem& p = problem_.problem;
+  core::Problem& p = problem_.problem;
   p.name = scene_.name;
   p.contacts = problemContacts(scene_, problem_.frames);
   for (const SceneContact& f : problem_.frames) {
     building_.max_penetration = std::max(building_.max_penetration, f.depth);
-    if (f.type == ContactType::kFrictionless) ++building_.frictionless_contacts;
+    if (f.type == core::ContactType::kFrictionless) ++building_.frictionless_contacts;
   }
   if (scene_.params.compliance == ComplianceStorage::kBodies) {
-    p.bodies = std::make_shared<const BodyCompliance>(model_->bodyCompliance(dt));
+    p.bodies = std::make_shared<const core::BodyCompliance>(model_->bodyCompliance(dt));
   } else {
     p.W = model_->compliance(dt, scene_.params.compliance);
   }
@@ -171,7 +171,7 @@ StepStats SceneSimulator::step() { return step(scene_.params.dt); }
 StepStats SceneSimulator::step(double dt) {
   const StepProblem& sp = buildStep(dt);
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(sp.problem.rowCount());
-  SolveResult result;
+  core::SolveResult result;
   double solve_time = 0.0;
   const bool solve = !sp.problem.contacts.empty();
   if (solve) {

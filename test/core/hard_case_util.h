@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace hard {
 
 constexpr double kG = 9.81;
@@ -344,4 +344,4 @@ inline SolveResult solveTwiceChecked(const Problem& p, const SolverParams& param
 }
 
 }  // namespace hard
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

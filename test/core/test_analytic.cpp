@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 Problem oneFrictionalContact(const Eigen::Matrix3d& W, const Eigen::Vector3d& d_free, double mu) {
@@ -276,4 +276,4 @@ TEST(Analytic, ResidualWithFreeMotionsNearDblMaxIsMeasuredToScale) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

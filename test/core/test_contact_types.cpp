@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // One contact with a diagonal W: every row decoupled, so each law can be checked alone.
@@ -166,4 +166,4 @@ TEST(ContactTypes, ZeroFrictionContactsAreSolvedAsOneRow) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -19,7 +19,7 @@
 #include <filesystem>
 #include <map>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 using namespace hard;
@@ -747,4 +747,4 @@ TEST(HardCases, LemkeRefusesProblemsTooLargeForItsTableau) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

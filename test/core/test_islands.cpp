@@ -18,7 +18,7 @@
 #include <numeric>
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 enum class Kinds { kFrictionless, kFrictional, kMixed };
@@ -385,4 +385,4 @@ TEST(SymmetricNewton, RankDeficientWStillSolved) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -1,6 +1,6 @@
 // Lexicographic Lemke (src/core/lemke.cpp), through the kernel and through ContactSolver.
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // A kernel call set up by hand: owns the problem and parameters the context points to.
@@ -494,4 +494,4 @@ TEST(LemkeContactSolver, RayTerminationIsReported) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 struct Expected {
@@ -144,4 +144,4 @@ TEST(LemkeShared, BlockAndDenseStorageAgree) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -10,7 +10,7 @@
 
 #include <string>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 using hard::Body;
@@ -235,4 +235,4 @@ TEST(Portfolio, ProxIsANamedSolver) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -6,7 +6,7 @@
 
 #include <limits>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 Problem twoContacts() {
@@ -101,4 +101,4 @@ TEST(Problem, SolverNamesRoundTrip) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -14,7 +14,7 @@
 #include <variant>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 namespace fs = std::filesystem;
@@ -396,4 +396,4 @@ TEST_F(ProblemIoFiles, FaultyFclibFilesAreRefusedWithoutEndingTheProcess) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -7,7 +7,7 @@
 // contact, one-row frictionless contacts).
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/core/scalar_rows.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "hard_case_util.h"
 
 #include <Eigen/Dense>
@@ -15,7 +15,7 @@
 
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // `groups` groups of bodies, each body with 6 dof; a contact (or, pyramid, its four edge
@@ -245,4 +245,4 @@ TEST(ScalarRows, ZeroDiagonalIsReported) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <set>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 namespace fs = std::filesystem;
@@ -133,4 +133,4 @@ TEST(SharedProblemSolves, SameInputGivesBitIdenticalOutput) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

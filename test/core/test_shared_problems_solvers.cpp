@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 namespace fs = std::filesystem;
@@ -127,4 +127,4 @@ TEST(SharedProblemsSolvers, PyramidPgsAndLemkeAgree) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // A random, well-posed frictional problem: W = J Jᵀ + εI (positive definite), pressed.
@@ -242,4 +242,4 @@ TEST(SofaParams, InvalidParametersAreRefused) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -10,7 +10,7 @@
 
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // Mixed contacts (frictional, μ = 0 frictional, frictionless, bilateral, torsional), some
@@ -219,4 +219,4 @@ TEST(SolveInPlace, WithoutStabilizationItIsTheSolve) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -2,7 +2,7 @@
 // apgd, newton, the pyramid friction models (boxed pgs, Lemke on the Stewart-Trinkle LCP)
 // and the per-solve time budget.
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include <limits>
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 SolverParams tight(SolverKind kind, double tolerance = 1e-12) {
@@ -649,4 +649,4 @@ TEST(TimeBudget, ZeroMeansNoBudget) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

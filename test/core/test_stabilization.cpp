@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // One frictionless contact: d = w λ + d_free.
@@ -178,4 +178,4 @@ TEST(Stabilization, InvalidValuesAreRefused) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -17,7 +17,7 @@
 #include <memory>
 #include <random>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // Relative difference of two force vectors (max norm), with a floor for all-zero answers.
@@ -522,4 +522,4 @@ TEST(Unbuilt, DisplayDebugHistoryMatches) {
 }
 
 }  // namespace
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -13,10 +13,10 @@ namespace lcs_fuzz {
 
 std::string datReaderOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream stream(std::string(reinterpret_cast<const char*>(data), size));
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   try {
-    problem = lcs::readSiconosDat(stream, "fuzz.dat");
-  } catch (const lcs::ProblemFileError& e) {
+    problem = lcs::core::readSiconosDat(stream, "fuzz.dat");
+  } catch (const lcs::core::ProblemFileError& e) {
     const std::string what = e.what();
     if (what.rfind("fuzz.dat: ", 0) != 0 || what.find('\n') != std::string::npos)
       return "reader error is not one line naming the input: " + what;
@@ -24,23 +24,23 @@ std::string datReaderOneInput(const std::uint8_t* data, std::size_t size) {
   } catch (const std::exception& e) {
     return std::string("reader threw something other than ProblemFileError: ") + e.what();
   }
-  if (const std::string fault = lcs::validateProblem(problem); !fault.empty())
+  if (const std::string fault = lcs::core::validateProblem(problem); !fault.empty())
     return "reader returned an invalid problem: " + fault;
   // Solve with small caps (the fuzzer must stay fast): every solver that takes the size.
   const int rows = problem.rowCount();
-  for (lcs::SolverKind kind : {lcs::SolverKind::kAuto, lcs::SolverKind::kPgs, lcs::SolverKind::kNlgs,
-                               lcs::SolverKind::kLemke, lcs::SolverKind::kApgd, lcs::SolverKind::kNewton}) {
-    if ((kind == lcs::SolverKind::kLemke || kind == lcs::SolverKind::kNewton) && rows > 300) continue;
-    lcs::SolverParams params;
+  for (lcs::core::SolverKind kind : {lcs::core::SolverKind::kAuto, lcs::core::SolverKind::kPgs, lcs::core::SolverKind::kNlgs,
+                               lcs::core::SolverKind::kLemke, lcs::core::SolverKind::kApgd, lcs::core::SolverKind::kNewton}) {
+    if ((kind == lcs::core::SolverKind::kLemke || kind == lcs::core::SolverKind::kNewton) && rows > 300) continue;
+    lcs::core::SolverParams params;
     params.solver = kind;
     params.maxIt = 30;
     params.tolerance = 1e-6;
     params.initial_guess = false;
-    const lcs::SolveResult a = lcs::solveProblem(problem, params);
+    const lcs::core::SolveResult a = lcs::core::solveProblem(problem, params);
     if (std::string err = checkResult(problem, params, a); !err.empty())
-      return std::string(lcs::solverName(kind)) + ": " + err;
-    const lcs::SolveResult b = lcs::solveProblem(problem, params);
-    if (std::string err = checkDeterministic(a, b); !err.empty()) return std::string(lcs::solverName(kind)) + ": " + err;
+      return std::string(lcs::core::solverName(kind)) + ": " + err;
+    const lcs::core::SolveResult b = lcs::core::solveProblem(problem, params);
+    if (std::string err = checkDeterministic(a, b); !err.empty()) return std::string(lcs::core::solverName(kind)) + ": " + err;
   }
   return "";
 }

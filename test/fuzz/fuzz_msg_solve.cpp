@@ -44,9 +44,9 @@ geometry_msgs::Vector3 vec(double x, double y, double z) {
   return v;
 }
 
-lcs::SolverParams readParams(FuzzInput& in) {
-  lcs::SolverParams p = lcp_contact_solver_ros::defaultSolverParams();
-  p.solver = static_cast<lcs::SolverKind>(in.below(6));
+lcs::core::SolverParams readParams(FuzzInput& in) {
+  lcs::core::SolverParams p = lcp_contact_solver_ros::defaultSolverParams();
+  p.solver = static_cast<lcs::core::SolverKind>(in.below(6));
   p.maxIt = 1 + in.below(40);
   const double tolerances[] = {1e-3, 1e-6, 1e-10, 0.5};
   p.tolerance = tolerances[in.below(4)];
@@ -54,9 +54,9 @@ lcs::SolverParams readParams(FuzzInput& in) {
   if (in.flag()) p.regularizationTerm = std::abs(in.number());
   if (in.flag()) p.minW = in.number();
   if (in.flag()) p.maxF = in.number();
-  p.friction_model = static_cast<lcs::FrictionModel>(in.below(3));
+  p.friction_model = static_cast<lcs::core::FrictionModel>(in.below(3));
   if (in.flag()) p.sor = 0.5 + in.below(150) / 100.0;
-  p.stopping_rule = in.flag() ? lcs::StoppingRule::kSofa : lcs::StoppingRule::kResidual;
+  p.stopping_rule = in.flag() ? lcs::core::StoppingRule::kSofa : lcs::core::StoppingRule::kResidual;
   p.max_rows = in.flag() ? in.below(40) : 0;
   p.initial_guess = in.flag();
   return p;
@@ -185,7 +185,7 @@ std::string checkMarkers(const visualization_msgs::MarkerArray& markers) {
 }
 
 std::string run(FuzzInput& in) {
-  const lcs::SolverParams params = readParams(in);
+  const lcs::core::SolverParams params = readParams(in);
   const std::uint8_t shape_bits = in.byte();
   const Shape shape{(shape_bits & 1) != 0, (shape_bits & 2) != 0, (shape_bits & 4) != 0, (shape_bits & 8) != 0,
                     (shape_bits & 16) != 0};
@@ -211,7 +211,7 @@ std::string run(FuzzInput& in) {
   if (a.gave_forces && a.has_forces && !lcp_contact_solver_ros::allFinite(a.forces)) return "non-finite forces message";
   if (a.has_forces && a.forces.forces.size() != contacts.contacts.size()) return "forces message size";
   const visualization_msgs::MarkerArray markers = lcp_contact_solver_ros::buildMarkers(
-      contacts.header, a.frames, a.problem, a.result, lcs::effectiveMu(a.problem, params.mu), display);
+      contacts.header, a.frames, a.problem, a.result, lcs::core::effectiveMu(a.problem, params.mu), display);
   if (std::string err = checkMarkers(markers); !err.empty()) return err;
   // The next cycle, warm-started from this one (the node's path).
   const lcp_contact_solver_ros::CycleOutput again = first.solve(contacts, compliance);

@@ -225,10 +225,10 @@ class AdversarialTest : public ::testing::Test {
     EXPECT_TRUE(stats->converged) << after;
     ASSERT_TRUE(waitFor([&] { return watch_->forces(good.contacts.header.stamp) != nullptr; }))
         << "no forces for the good message after " << after;
-    lcs::Problem problem;
+    lcs::core::Problem problem;
     std::vector<lcp_contact_solver_ros::ContactFrame> frames;
     ASSERT_EQ(lcp_contact_solver_ros::toProblem(good.contacts, good.compliance, 0, &problem, &frames), "");
-    const lcs::SolveResult expected = lcs::solveProblem(problem, lcp_contact_solver_ros::defaultSolverParams());
+    const lcs::core::SolveResult expected = lcs::core::solveProblem(problem, lcp_contact_solver_ros::defaultSolverParams());
     const lcs::ConstraintForces& got = *watch_->forces(good.contacts.header.stamp);
     ASSERT_EQ(got.forces.size(), problem.contacts.size());
     const std::vector<int> off = problem.rowOffsets();

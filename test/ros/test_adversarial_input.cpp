@@ -82,7 +82,7 @@ TEST(ConversionLimits, HardRowLimitWithoutMaxRows) {
   for (std::size_t i = 0; i < s.contacts.contacts.size(); ++i) s.contacts.contacts[i].id = static_cast<std::int64_t>(i);
   s.compliance.rows = 1000002;
   s.compliance.data.clear();
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::vector<ContactFrame> frames;
   const auto t0 = std::chrono::steady_clock::now();
   const std::string error = toProblem(s.contacts, s.compliance, 0, &problem, &frames);
@@ -99,7 +99,7 @@ TEST(ConversionLimits, ContactCountOverTheLimitIsRefusedFirst) {
   Scene s = makeScene(1, ros::Time(1.0));
   ContactPoint c;  // default: even invalid contents are not looked at
   s.contacts.contacts.assign(100000, c);
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::vector<ContactFrame> frames;
   const std::string error = toProblem(s.contacts, s.compliance, 1000, &problem, &frames);
   EXPECT_EQ(error, "the array has 100000 contacts, more than the row limit of 1000");

@@ -147,18 +147,18 @@ class ContactSolverNodeTest : public ::testing::Test {
   }
 
   // What the core gives for the same messages, parameters as in config/default.yaml.
-  static lcs::SolveResult directSolve(const Scene& scene, lcs::Problem* problem = nullptr,
+  static lcs::core::SolveResult directSolve(const Scene& scene, lcs::core::Problem* problem = nullptr,
                                       std::vector<lcp_contact_solver_ros::ContactFrame>* frames = nullptr) {
-    lcs::Problem p;
+    lcs::core::Problem p;
     std::vector<lcp_contact_solver_ros::ContactFrame> f;
     EXPECT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &p, &f), "");
     if (problem) *problem = p;
     if (frames) *frames = f;
-    return lcs::solveProblem(p, lcp_contact_solver_ros::defaultSolverParams());
+    return lcs::core::solveProblem(p, lcp_contact_solver_ros::defaultSolverParams());
   }
 
-  static void expectForcesEqual(const lcs::ConstraintForces& msg, const lcs::Problem& problem,
-                                const lcs::SolveResult& result) {
+  static void expectForcesEqual(const lcs::ConstraintForces& msg, const lcs::core::Problem& problem,
+                                const lcs::core::SolveResult& result) {
     ASSERT_EQ(msg.forces.size(), problem.contacts.size());
     const std::vector<int> offsets = problem.rowOffsets();
     for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
@@ -197,8 +197,8 @@ TEST_F(ContactSolverNodeTest, PublishedForcesEqualTheCores) {
     const lcs::SolverStats* stats = solve(scene);
     ASSERT_NE(stats, nullptr);
     ASSERT_TRUE(forces.wait(scene.contacts.header.stamp));
-    lcs::Problem problem;
-    const lcs::SolveResult expected = directSolve(scene, &problem);
+    lcs::core::Problem problem;
+    const lcs::core::SolveResult expected = directSolve(scene, &problem);
     ASSERT_TRUE(expected.converged);
     expectForcesEqual(*forces.get(scene.contacts.header.stamp), problem, expected);
     EXPECT_TRUE(stats->success);
@@ -218,8 +218,8 @@ TEST_F(ContactSolverNodeTest, ServiceReturnsTheSameForces) {
   ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
   EXPECT_TRUE(srv.response.success) << srv.response.message;
   EXPECT_EQ(srv.response.message, "converged");
-  lcs::Problem problem;
-  const lcs::SolveResult expected = directSolve(scene, &problem);
+  lcs::core::Problem problem;
+  const lcs::core::SolveResult expected = directSolve(scene, &problem);
   expectForcesEqual(srv.response.forces, problem, expected);
   EXPECT_EQ(srv.response.stats.iterations, expected.iterations);
 
@@ -259,16 +259,16 @@ TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact)
   srv.request.param_overrides = {"erp=0.2", "softness=0.05", "tolerance=1e-10"};
   ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
   ASSERT_TRUE(srv.response.success) << srv.response.message;
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::vector<lcp_contact_solver_ros::ContactFrame> frames;
   ASSERT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &problem, &frames), "");
   EXPECT_EQ(problem.contacts[1].erp, 0.5);
   EXPECT_EQ(problem.contacts[0].gap, -0.02);
-  lcs::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
+  lcs::core::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
   params.erp = 0.2;
   params.softness = 0.05;
   params.tolerance = 1e-10;
-  const lcs::SolveResult expected = lcs::solveProblem(problem, params);
+  const lcs::core::SolveResult expected = lcs::core::solveProblem(problem, params);
   ASSERT_TRUE(expected.converged) << expected.message;
   expectForcesEqual(srv.response.forces, problem, expected);
   // The node's defaults (erp 0, softness 0) give the uncorrected forces: different ones.
@@ -277,7 +277,7 @@ TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact)
   ASSERT_TRUE(srv.response.success) << srv.response.message;
   params.erp = 0.0;
   params.softness = 0.0;
-  const lcs::SolveResult plain = lcs::solveProblem(problem, params);
+  const lcs::core::SolveResult plain = lcs::core::solveProblem(problem, params);
   expectForcesEqual(srv.response.forces, problem, plain);
   EXPECT_GT((plain.forces - expected.forces).norm(), 1e-3);
   // Velocity level without a step: refused, naming the parameter.
@@ -292,16 +292,16 @@ TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact)
 // (the node's default) assembles W; the topics take the body form too.
 TEST_F(ContactSolverNodeTest, BodyFormSolvesUnbuiltWithBuildLcpFalse) {
   const Scene scene = lcp_contact_solver_test::makeBodyFormScene(freshIds(), freshStamp());
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::vector<lcp_contact_solver_ros::ContactFrame> frames;
   ASSERT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &problem, &frames), "");
   ASSERT_TRUE(problem.bodies);
-  lcs::Problem assembled = problem;  // the built problem: the same W, assembled and dense
+  lcs::core::Problem assembled = problem;  // the built problem: the same W, assembled and dense
   assembled.bodies.reset();
   assembled.W = problem.bodies->toDense();
-  lcs::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
+  lcs::core::SolverParams params = lcp_contact_solver_ros::defaultSolverParams();
   params.tolerance = 1e-10;
-  const lcs::SolveResult built = lcs::solveProblem(assembled, params);
+  const lcs::core::SolveResult built = lcs::core::solveProblem(assembled, params);
   ASSERT_TRUE(built.converged) << built.message;
 
   lcs::SolveContacts srv;

@@ -33,7 +33,7 @@ Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v) { return {v.x, v.y, v.z
 Eigen::Vector3d toEigen(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
 
 struct Converted {
-  lcs::Problem problem;
+  lcs::core::Problem problem;
   std::vector<ContactFrame> frames;
   std::string error;
 };
@@ -81,17 +81,17 @@ TEST(ToProblem, ReadsContactsInOrder) {
   ASSERT_EQ(c.problem.contacts.size(), 4u);
   EXPECT_EQ(c.problem.rowCount(), 9);
   EXPECT_EQ(c.problem.contacts[0].id, 10);
-  EXPECT_EQ(c.problem.contacts[0].type, lcs::ContactType::kFrictional);
+  EXPECT_EQ(c.problem.contacts[0].type, lcs::core::ContactType::kFrictional);
   EXPECT_EQ(c.problem.contacts[0].mu, -1.0);  // MU_DEFAULT reaches the core as "not given"
   EXPECT_EQ(c.problem.contacts[1].mu, 0.2);
-  EXPECT_EQ(c.problem.contacts[2].type, lcs::ContactType::kFrictionless);
+  EXPECT_EQ(c.problem.contacts[2].type, lcs::core::ContactType::kFrictionless);
   EXPECT_EQ(c.problem.contacts[2].rows, 1);
-  EXPECT_EQ(c.problem.contacts[3].type, lcs::ContactType::kBilateral);
+  EXPECT_EQ(c.problem.contacts[3].type, lcs::core::ContactType::kBilateral);
   EXPECT_EQ(c.problem.contacts[3].rows, 2);
   Eigen::VectorXd d_free(9);
   d_free << -0.02, 0.01, 0.0, -0.01, -0.02, 0.005, -0.015, 0.01, -0.01;
   EXPECT_EQ(c.problem.d_free, d_free);
-  EXPECT_EQ(lcs::toDense(c.problem.W), lcp_contact_solver_test::coupledCompliance(9));
+  EXPECT_EQ(lcs::core::toDense(c.problem.W), lcp_contact_solver_test::coupledCompliance(9));
 }
 
 TEST(ToProblem, FramesNormalizeAndDeriveTangents) {
@@ -108,10 +108,10 @@ TEST(ToProblem, BlockSparseEqualsDense) {
   const Converted dense = convert(makeScene(10, kStamp));
   const Converted sparse = convert(makeScene(10, kStamp, true));
   ASSERT_EQ(sparse.error, "");
-  ASSERT_TRUE(std::holds_alternative<lcs::BlockSparseMatrix>(sparse.problem.W));
-  EXPECT_EQ(lcs::toDense(sparse.problem.W), lcs::toDense(dense.problem.W));
-  const lcs::SolveResult a = lcs::solveProblem(dense.problem, defaultSolverParams());
-  const lcs::SolveResult b = lcs::solveProblem(sparse.problem, defaultSolverParams());
+  ASSERT_TRUE(std::holds_alternative<lcs::core::BlockSparseMatrix>(sparse.problem.W));
+  EXPECT_EQ(lcs::core::toDense(sparse.problem.W), lcs::core::toDense(dense.problem.W));
+  const lcs::core::SolveResult a = lcs::core::solveProblem(dense.problem, defaultSolverParams());
+  const lcs::core::SolveResult b = lcs::core::solveProblem(sparse.problem, defaultSolverParams());
   EXPECT_TRUE(a.converged);
   EXPECT_LT((a.forces - b.forces).norm(), 1e-9);
 }
@@ -140,8 +140,8 @@ TEST(ToProblem, BlockSparseInAnyBlockOrderIsTheSameMatrix) {
   ASSERT_GT(W.block_rows.size(), 2u);
   const Converted sorted = convert(reversed);
   ASSERT_EQ(sorted.error, "");
-  const auto& a = std::get<lcs::BlockSparseMatrix>(in_order.problem.W);
-  const auto& b = std::get<lcs::BlockSparseMatrix>(sorted.problem.W);
+  const auto& a = std::get<lcs::core::BlockSparseMatrix>(in_order.problem.W);
+  const auto& b = std::get<lcs::core::BlockSparseMatrix>(sorted.problem.W);
   EXPECT_EQ(a.values, b.values);
   EXPECT_EQ(a.block_col, b.block_col);
   EXPECT_EQ(a.row_start, b.row_start);
@@ -195,7 +195,7 @@ TEST(ToProblem, BlockSparseWithMissingBlocksIsZeroThere) {
   scene.compliance = diagonal;
   const Converted c = convert(scene);
   ASSERT_EQ(c.error, "");
-  const Eigen::MatrixXd W = lcs::toDense(c.problem.W), full = lcp_contact_solver_test::coupledCompliance(9);
+  const Eigen::MatrixXd W = lcs::core::toDense(c.problem.W), full = lcp_contact_solver_test::coupledCompliance(9);
   EXPECT_EQ(W(0, 3), 0.0);
   EXPECT_EQ(W(6, 6), full(6, 6));
   EXPECT_EQ(W.block(7, 7, 2, 2), full.block(7, 7, 2, 2));
@@ -256,7 +256,7 @@ TEST(ToComplianceMsg, RoundTripsBlockSparse) {
   again.compliance = toComplianceMsg(sparse.problem.W);
   const Converted c = convert(again);
   ASSERT_EQ(c.error, "");
-  EXPECT_EQ(lcs::toDense(c.problem.W), lcs::toDense(sparse.problem.W));
+  EXPECT_EQ(lcs::core::toDense(c.problem.W), lcs::core::toDense(sparse.problem.W));
 }
 
 // ---- the body form (STORAGE_BODIES, build_lcp = false) ----------------------------------
@@ -283,7 +283,7 @@ TEST(ToProblem, BodyFormGivesTheBodiesAndNoW) {
   const Converted c = convert(scene);
   ASSERT_EQ(c.error, "");
   ASSERT_TRUE(c.problem.bodies);
-  EXPECT_EQ(lcs::complianceRows(c.problem.W), 0);
+  EXPECT_EQ(lcs::core::complianceRows(c.problem.W), 0);
   EXPECT_EQ(c.problem.bodies->bodyCount(), 3);
   EXPECT_EQ(c.problem.bodies->contacts[2].body_a, 1);
   EXPECT_EQ(c.problem.bodies->contacts[2].body_b, 0);
@@ -316,18 +316,18 @@ TEST(ToProblem, BodyFormSolvesUnbuiltToTheBuiltForces) {
   dense.compliance = toComplianceMsg(bodyFormW(scene.compliance));
   const Converted built = convert(dense);
   ASSERT_EQ(built.error, "");
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   params.tolerance = 1e-10;
   params.build_lcp = false;
-  const lcs::SolveResult u = lcs::solveProblem(bodies.problem, params);
+  const lcs::core::SolveResult u = lcs::core::solveProblem(bodies.problem, params);
   params.build_lcp = true;
-  const lcs::SolveResult b = lcs::solveProblem(built.problem, params);
+  const lcs::core::SolveResult b = lcs::core::solveProblem(built.problem, params);
   ASSERT_TRUE(u.converged) << u.message;
   ASSERT_TRUE(b.converged) << b.message;
   EXPECT_TRUE(u.unbuilt);
   EXPECT_LT((u.forces - b.forces).cwiseAbs().maxCoeff(), 1e-8 * b.forces.cwiseAbs().maxCoeff());
   // The debug line and the heat map read the body form.
-  const std::vector<double> mu = lcs::effectiveMu(bodies.problem, params.mu);
+  const std::vector<double> mu = lcs::core::effectiveMu(bodies.problem, params.mu);
   EXPECT_NE(cycleSummary(bodies.problem, u, mu).find("4 contacts, 9 rows (bodies, no W)"), std::string::npos);
   DisplayOptions options;
   options.showCellWidth = 0.1;
@@ -384,7 +384,7 @@ TEST(ToConstraintForcesMsg, ForcesFollowTheContactFrames) {
   const Scene scene = makeScene(10, kStamp);
   const Converted c = convert(scene);
   ASSERT_EQ(c.error, "");
-  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  const lcs::core::SolveResult result = lcs::core::solveProblem(c.problem, defaultSolverParams());
   ASSERT_TRUE(result.converged);
   const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, c.frames, c.problem, result);
   EXPECT_EQ(msg.header.stamp, kStamp);
@@ -409,7 +409,7 @@ TEST(ToConstraintForcesMsg, ForcesFollowTheContactFrames) {
 TEST(SumBodyPairWrenches, SumsForceAndTorquePerPair) {
   const Scene scene = makeScene(10, kStamp);
   const Converted c = convert(scene);
-  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  const lcs::core::SolveResult result = lcs::core::solveProblem(c.problem, defaultSolverParams());
   const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, c.frames, c.problem, result);
   ASSERT_EQ(msg.wrenches.size(), 3u);  // (box, ground), (ball, box), (arm, box) in order
   EXPECT_EQ(msg.wrenches[0].body_a, "box");
@@ -469,11 +469,11 @@ TEST(ToConstraintForcesMsg, TorsionalAndRollingRowsAreATorque) {
   scene.compliance.data.assign(W.data(), W.data() + 36);
   const Converted conv = convert(scene);
   ASSERT_EQ(conv.error, "");
-  ASSERT_EQ(conv.problem.contacts[0].type, lcs::ContactType::kRolling);
+  ASSERT_EQ(conv.problem.contacts[0].type, lcs::core::ContactType::kRolling);
   EXPECT_EQ(conv.problem.contacts[0].mu_rolling, 0.01);
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   params.tolerance = 1e-12;
-  const lcs::SolveResult result = lcs::solveProblem(conv.problem, params);
+  const lcs::core::SolveResult result = lcs::core::solveProblem(conv.problem, params);
   ASSERT_TRUE(result.converged) << result.message;
   const lcs::ConstraintForces msg = toConstraintForcesMsg(scene.contacts, conv.frames, conv.problem, result);
   const ContactFrame& frame = conv.frames[0];
@@ -490,7 +490,7 @@ TEST(ToConstraintForcesMsg, TorsionalAndRollingRowsAreATorque) {
 TEST(StatsMsg, CarriesTheResult) {
   const Scene scene = makeScene(10, kStamp);
   const Converted c = convert(scene);
-  const lcs::SolveResult result = lcs::solveProblem(c.problem, defaultSolverParams());
+  const lcs::core::SolveResult result = lcs::core::solveProblem(c.problem, defaultSolverParams());
   const lcs::SolverStats stats = toStatsMsg(scene.contacts.header, c.problem, result);
   EXPECT_TRUE(stats.success);
   EXPECT_EQ(stats.status, "converged");
@@ -539,13 +539,13 @@ TEST(SolverParamsRos, DefaultsAreSofas) {
 }
 
 TEST(SolverParamsRos, OverridesParseAndNameTheirFaults) {
-  lcs::SolverParams p = defaultSolverParams();
+  lcs::core::SolverParams p = defaultSolverParams();
   EXPECT_EQ(applyOverride("maxIt=50", &p), "");
   EXPECT_EQ(p.maxIt, 50);
   EXPECT_EQ(applyOverride("mu=0.25", &p), "");
   EXPECT_EQ(p.mu, 0.25);
   EXPECT_EQ(applyOverride("solver=lemke", &p), "");
-  EXPECT_EQ(p.solver, lcs::SolverKind::kLemke);
+  EXPECT_EQ(p.solver, lcs::core::SolverKind::kLemke);
   EXPECT_EQ(applyOverride("build_lcp=false", &p), "");
   EXPECT_FALSE(p.build_lcp);
   EXPECT_NE(applyOverride("maxIt=abc", &p).find("maxIt"), std::string::npos);
@@ -557,13 +557,13 @@ TEST(SolverParamsRos, OverridesParseAndNameTheirFaults) {
 }
 
 TEST(SolverParamsRos, OverridesTrimSpacesAroundNameAndValue) {
-  lcs::SolverParams p = defaultSolverParams();
+  lcs::core::SolverParams p = defaultSolverParams();
   EXPECT_EQ(applyOverride("tolerance = 1e-3", &p), "");  // as written in a YAML list
   EXPECT_EQ(p.tolerance, 1e-3);
   EXPECT_EQ(applyOverride("  maxIt=\t42 ", &p), "");
   EXPECT_EQ(p.maxIt, 42);
   EXPECT_EQ(applyOverride("solver = newton", &p), "");
-  EXPECT_EQ(p.solver, lcs::SolverKind::kNewton);
+  EXPECT_EQ(p.solver, lcs::core::SolverKind::kNewton);
   EXPECT_EQ(applyOverride("islands=false", &p), "");
   EXPECT_FALSE(p.islands);
   EXPECT_EQ(applyOverride("threads=1", &p), "");
@@ -575,7 +575,7 @@ TEST(SolverParamsRos, OverridesTrimSpacesAroundNameAndValue) {
 TEST(SolverParamsRos, ConfigRoundTripAndRejection) {
   NodeSettings s;
   s.solver.maxIt = 77;
-  s.solver.solver = lcs::SolverKind::kPgs;
+  s.solver.solver = lcs::core::SolverKind::kPgs;
   s.display.showTranslation = {{1.0, 2.0, 3.0}};
   s.pairing_window = 0.7;  // startup-only: kept by fromConfig
   lcp_contact_solver::ContactSolverConfig config = toConfig(s);
@@ -610,8 +610,8 @@ class Markers : public ::testing::Test {
     scene_ = makeScene(10, kStamp);
     c_ = convert(scene_);
     ASSERT_EQ(c_.error, "");
-    result_ = lcs::solveProblem(c_.problem, defaultSolverParams());
-    mu_ = lcs::effectiveMu(c_.problem, 0.6);
+    result_ = lcs::core::solveProblem(c_.problem, defaultSolverParams());
+    mu_ = lcs::core::effectiveMu(c_.problem, 0.6);
   }
 
   std::set<std::string> namespaces(const visualization_msgs::MarkerArray& markers) const {
@@ -628,7 +628,7 @@ class Markers : public ::testing::Test {
 
   Scene scene_;
   Converted c_;
-  lcs::SolveResult result_;
+  lcs::core::SolveResult result_;
   std::vector<double> mu_;
 };
 
@@ -659,7 +659,7 @@ TEST_F(Markers, StableNamespacesAndNoHeatmapByDefault) {
 TEST_F(Markers, ColoursTellStatesAndForcesApart) {
   const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, DisplayOptions());
   std::vector<std_msgs::ColorRGBA> colours;
-  for (int s = 0; s < lcs::kContactStateCount; ++s) colours.push_back(stateColor(static_cast<lcs::ContactState>(s)));
+  for (int s = 0; s < lcs::core::kContactStateCount; ++s) colours.push_back(stateColor(static_cast<lcs::core::ContactState>(s)));
   bool arrows = false;
   for (const auto& m : markers.markers) {
     if (m.ns != kNsForces) continue;
@@ -844,10 +844,10 @@ TEST(InputQueue, StopWakesAWaitingTake) {
 TEST(CycleLog, NamesTheWorstContact) {
   const Scene scene = makeScene(10, kStamp);
   const Converted c = convert(scene);
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   params.maxIt = 1;  // far from converged: some contact has a clear error
-  const lcs::SolveResult result = lcs::solveProblem(c.problem, params);
-  const std::vector<double> mu = lcs::effectiveMu(c.problem, params.mu);
+  const lcs::core::SolveResult result = lcs::core::solveProblem(c.problem, params);
+  const std::vector<double> mu = lcs::core::effectiveMu(c.problem, params.mu);
   double worst_error = 0.0;
   const int worst = worstContact(c.problem, result, mu, &worst_error);
   ASSERT_GE(worst, 0);

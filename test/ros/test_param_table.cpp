@@ -34,7 +34,7 @@ struct NodeSpec {
   std::string value;  // NodeSettings{}'s value as text (vec3: its x)
 };
 
-std::string numberText(double v) { return lcs::exactDoubleText(v); }
+std::string numberText(double v) { return lcs::core::exactDoubleText(v); }
 
 std::string axisDoc(std::string doc, char axis) { return doc.replace(doc.find("AXIS"), 4, std::string(1, axis)); }
 
@@ -87,7 +87,7 @@ std::string configText(const Config& config, const std::string& name) {
     if (description->name != name) continue;
     boost::any value;
     description->getValue(config, value);
-    if (const double* v = boost::any_cast<double>(&value)) return lcs::exactDoubleText(*v);
+    if (const double* v = boost::any_cast<double>(&value)) return lcs::core::exactDoubleText(*v);
     if (const int* v = boost::any_cast<int>(&value)) return std::to_string(*v);
     if (const bool* v = boost::any_cast<bool>(&value)) return *v ? "true" : "false";
     if (const std::string* v = boost::any_cast<std::string>(&value)) return *v;
@@ -105,103 +105,103 @@ std::string readText(const std::string& path) {
 }  // namespace
 
 TEST(ParamTable, DefaultsAreSolverParamsDefaults) {
-  const lcs::SolverParams defaults;
-  ASSERT_FALSE(lcs::solverParamSpecs().empty());
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    EXPECT_EQ(lcs::paramText(defaults, spec.name), spec.default_text) << spec.name;
+  const lcs::core::SolverParams defaults;
+  ASSERT_FALSE(lcs::core::solverParamSpecs().empty());
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    EXPECT_EQ(lcs::core::paramText(defaults, spec.name), spec.default_text) << spec.name;
 }
 
 TEST(ParamTable, EnumChoicesAreTheCoresNames) {
-  EXPECT_EQ(lcs::findSolverParam("solver")->choices, lcs::solverNames());
-  EXPECT_EQ(lcs::findSolverParam("friction_model")->choices, lcs::frictionModelNames());
-  EXPECT_EQ(lcs::findSolverParam("stopping_rule")->choices, (std::vector<std::string>{"residual", "sofa"}));
-  EXPECT_EQ(lcs::findSolverParam("constraint_level")->choices, (std::vector<std::string>{"position", "velocity"}));
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
-    if (spec.type != lcs::ParamType::kEnum) continue;
+  EXPECT_EQ(lcs::core::findSolverParam("solver")->choices, lcs::core::solverNames());
+  EXPECT_EQ(lcs::core::findSolverParam("friction_model")->choices, lcs::core::frictionModelNames());
+  EXPECT_EQ(lcs::core::findSolverParam("stopping_rule")->choices, (std::vector<std::string>{"residual", "sofa"}));
+  EXPECT_EQ(lcs::core::findSolverParam("constraint_level")->choices, (std::vector<std::string>{"position", "velocity"}));
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
+    if (spec.type != lcs::core::ParamType::kEnum) continue;
     for (const std::string& choice : spec.choices) {
-      lcs::SolverParams p;
-      EXPECT_EQ(lcs::setParam(&p, spec.name, choice), "") << spec.name;
-      EXPECT_EQ(lcs::paramText(p, spec.name), choice);
+      lcs::core::SolverParams p;
+      EXPECT_EQ(lcs::core::setParam(&p, spec.name, choice), "") << spec.name;
+      EXPECT_EQ(lcs::core::paramText(p, spec.name), choice);
     }
   }
 }
 
 // Every parameter away from its default (EveryParameterRoundTripsThroughText checks that).
-lcs::SolverParams changedParams() {
-  lcs::SolverParams p;
+lcs::core::SolverParams changedParams() {
+  lcs::core::SolverParams p;
   for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
                         "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
                         "displayDebug=true", "solver=prox", "friction_model=pyramid8", "sor=1.3",
                         "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
                         "constraint_level=velocity", "time_step=0.01", "max_rows=12", "islands=false",
                         "threads=3"})
-    EXPECT_EQ(lcs::applyAssignment(&p, a), "") << a;
+    EXPECT_EQ(lcs::core::applyAssignment(&p, a), "") << a;
   return p;
 }
 
 TEST(ParamTable, EveryParameterRoundTripsThroughText) {
-  const lcs::SolverParams p = changedParams();
+  const lcs::core::SolverParams p = changedParams();
   // Every parameter was changed from its default, so the list above is the whole table.
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
-    EXPECT_NE(lcs::paramText(p, spec.name), spec.default_text) << spec.name << " not covered";
-    lcs::SolverParams q;
-    ASSERT_EQ(lcs::setParam(&q, spec.name, lcs::paramText(p, spec.name)), "") << spec.name;
-    EXPECT_EQ(lcs::paramText(q, spec.name), lcs::paramText(p, spec.name));
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
+    EXPECT_NE(lcs::core::paramText(p, spec.name), spec.default_text) << spec.name << " not covered";
+    lcs::core::SolverParams q;
+    ASSERT_EQ(lcs::core::setParam(&q, spec.name, lcs::core::paramText(p, spec.name)), "") << spec.name;
+    EXPECT_EQ(lcs::core::paramText(q, spec.name), lcs::core::paramText(p, spec.name));
   }
   EXPECT_EQ(p.regularizationTerm, 3e-9);
   EXPECT_EQ(p.threads, 3);
   for (double v : {0.1, 1.0 / 3.0, 1e-300, 6.02214076e23, -2.5})
-    EXPECT_EQ(std::strtod(lcs::exactDoubleText(v).c_str(), nullptr), v);
+    EXPECT_EQ(std::strtod(lcs::core::exactDoubleText(v).c_str(), nullptr), v);
 }
 
 TEST(ParamTable, OneParserPerTypeRefusesWithTheExpectation) {
-  lcs::SolverParams p;
-  EXPECT_EQ(lcs::setParam(&p, "tolerance", "nan"), "tolerance='nan' must be a finite number");
-  EXPECT_NE(lcs::setParam(&p, "mu", "inf"), "");
-  EXPECT_NE(lcs::setParam(&p, "mu", "1e400"), "");
-  EXPECT_NE(lcs::setParam(&p, "mu", " 1"), "");
-  EXPECT_NE(lcs::setParam(&p, "mu", ""), "");
-  EXPECT_EQ(lcs::setParam(&p, "maxIt", "5.5"), "maxIt='5.5' must be an integer");
-  EXPECT_NE(lcs::setParam(&p, "maxIt", "99999999999"), "");
-  EXPECT_EQ(lcs::setParam(&p, "islands", "maybe"), "islands='maybe' must be true or false");
-  EXPECT_EQ(lcs::setParam(&p, "solver", "fast"), "solver='fast' must be one of auto, pgs, nlgs, lemke, apgd, newton, prox");
-  EXPECT_EQ(lcs::setParam(&p, "speed", "3"), "'speed' is not a solver parameter");
-  EXPECT_EQ(lcs::applyAssignment(&p, "tolerance"), "'tolerance' is not of the form name=value");
-  EXPECT_EQ(lcs::applyAssignment(&p, "initial_guess=false", lcs::kParamOverride),
+  lcs::core::SolverParams p;
+  EXPECT_EQ(lcs::core::setParam(&p, "tolerance", "nan"), "tolerance='nan' must be a finite number");
+  EXPECT_NE(lcs::core::setParam(&p, "mu", "inf"), "");
+  EXPECT_NE(lcs::core::setParam(&p, "mu", "1e400"), "");
+  EXPECT_NE(lcs::core::setParam(&p, "mu", " 1"), "");
+  EXPECT_NE(lcs::core::setParam(&p, "mu", ""), "");
+  EXPECT_EQ(lcs::core::setParam(&p, "maxIt", "5.5"), "maxIt='5.5' must be an integer");
+  EXPECT_NE(lcs::core::setParam(&p, "maxIt", "99999999999"), "");
+  EXPECT_EQ(lcs::core::setParam(&p, "islands", "maybe"), "islands='maybe' must be true or false");
+  EXPECT_EQ(lcs::core::setParam(&p, "solver", "fast"), "solver='fast' must be one of auto, pgs, nlgs, lemke, apgd, newton, prox");
+  EXPECT_EQ(lcs::core::setParam(&p, "speed", "3"), "'speed' is not a solver parameter");
+  EXPECT_EQ(lcs::core::applyAssignment(&p, "tolerance"), "'tolerance' is not of the form name=value");
+  EXPECT_EQ(lcs::core::applyAssignment(&p, "initial_guess=false", lcs::core::kParamOverride),
             "'initial_guess' is not a solver parameter");
-  const lcs::SolverParams defaults;
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())  // refusals changed nothing
-    EXPECT_EQ(lcs::paramText(p, spec.name), spec.default_text) << spec.name;
+  const lcs::core::SolverParams defaults;
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())  // refusals changed nothing
+    EXPECT_EQ(lcs::core::paramText(p, spec.name), spec.default_text) << spec.name;
   for (const char* yes : {"true", "1", "yes", "On", "TRUE"}) {
     p.islands = false;
-    EXPECT_EQ(lcs::setParam(&p, "islands", yes), "");
+    EXPECT_EQ(lcs::core::setParam(&p, "islands", yes), "");
     EXPECT_TRUE(p.islands) << yes;
   }
-  EXPECT_EQ(lcs::setParam(&p, "islands", "off"), "");
+  EXPECT_EQ(lcs::core::setParam(&p, "islands", "off"), "");
   EXPECT_FALSE(p.islands);
   // Ranges are dynamic_reconfigure's; what a value must be is validateParams' (a start-up
   // tolerance of 1e-300, below the slider's 1e-16, is a test's way to never converge).
-  EXPECT_EQ(lcs::setParam(&p, "tolerance", "1e-300"), "");
+  EXPECT_EQ(lcs::core::setParam(&p, "tolerance", "1e-300"), "");
   EXPECT_EQ(p.tolerance, 1e-300);
 }
 
 TEST(ParamTable, ShippedDefaultYamlHoldsEveryParameterAtTheNodeDefault) {
   const std::string path = LCS_CONFIG_DIR "/default.yaml";
-  lcs::SolverParams loaded = defaultSolverParams();
+  lcs::core::SolverParams loaded = defaultSolverParams();
   ASSERT_EQ(lcp_contact_solver_ros::loadParamsFile(path, &loaded), "");  // every key known
   const YAML::Node root = YAML::LoadFile(path);
-  const lcs::SolverParams node = defaultSolverParams();
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+  const lcs::core::SolverParams node = defaultSolverParams();
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
     ASSERT_TRUE(root[spec.name]) << spec.name << " missing from default.yaml";
-    lcs::SolverParams p;
-    ASSERT_EQ(lcs::setParam(&p, spec.name, root[spec.name].Scalar()), "");
-    EXPECT_EQ(lcs::paramText(p, spec.name), lcs::paramText(node, spec.name)) << spec.name;
+    lcs::core::SolverParams p;
+    ASSERT_EQ(lcs::core::setParam(&p, spec.name, root[spec.name].Scalar()), "");
+    EXPECT_EQ(lcs::core::paramText(p, spec.name), lcs::core::paramText(node, spec.name)) << spec.name;
   }
   EXPECT_EQ(node.max_rows, 30000);  // node_param_defaults.def
   for (const auto& entry : root) {  // every key is in one of the two tables
     const std::string key = entry.first.Scalar();
     const NodeSpec* spec = findNodeSpec(entry.second.IsSequence() ? key + "_x" : key);
-    EXPECT_TRUE(lcs::findSolverParam(key) != nullptr || spec != nullptr) << key << " is in no table";
+    EXPECT_TRUE(lcs::core::findSolverParam(key) != nullptr || spec != nullptr) << key << " is in no table";
     if (spec == nullptr) continue;
     if (spec->type == "vec3") {
       ASSERT_EQ(entry.second.size(), 3u) << key;
@@ -221,11 +221,11 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
   const Config& lo = Config::__getMin__();
   const Config& hi = Config::__getMax__();
   const Config& def = Config::__getDefault__();
-  const lcs::SolverParams node = defaultSolverParams();
+  const lcs::core::SolverParams node = defaultSolverParams();
   std::set<std::string> in_config;
   for (const auto& description : Config::__getParamDescriptions__()) {
     in_config.insert(description->name);
-    const lcs::ParamSpec* spec = lcs::findSolverParam(description->name);
+    const lcs::core::ParamSpec* spec = lcs::core::findSolverParam(description->name);
     if (spec == nullptr) {
       const NodeSpec* node_spec = findNodeSpec(description->name);
       ASSERT_NE(node_spec, nullptr) << description->name << " is in no table";
@@ -238,20 +238,20 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
       }
       continue;
     }
-    EXPECT_TRUE(spec->access & lcs::kParamReconfigure) << spec->name;
+    EXPECT_TRUE(spec->access & lcs::core::kParamReconfigure) << spec->name;
     EXPECT_EQ(description->description, spec->doc) << spec->name;
-    EXPECT_EQ(configText(def, spec->name), lcs::paramText(node, spec->name)) << spec->name;
-    if (spec->type == lcs::ParamType::kDouble || spec->type == lcs::ParamType::kInt) {
+    EXPECT_EQ(configText(def, spec->name), lcs::core::paramText(node, spec->name)) << spec->name;
+    if (spec->type == lcs::core::ParamType::kDouble || spec->type == lcs::core::ParamType::kInt) {
       EXPECT_EQ(configNumber(lo, spec->name), spec->min) << spec->name;
       EXPECT_EQ(configNumber(hi, spec->name), spec->max) << spec->name;
     }
-    if (spec->type == lcs::ParamType::kEnum) {
+    if (spec->type == lcs::core::ParamType::kEnum) {
       for (const std::string& choice : spec->choices)
         EXPECT_NE(description->edit_method.find("'value': '" + choice + "'"), std::string::npos) << choice;
     }
   }
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::kParamReconfigure) ? 1u : 0u) << spec.name;
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::core::kParamReconfigure) ? 1u : 0u) << spec.name;
   for (const NodeSpec& spec : nodeSpecs()) EXPECT_EQ(in_config.count(spec.name), spec.in_config ? 1u : 0u) << spec.name;
 }
 
@@ -268,9 +268,9 @@ TEST(ParamTable, ConfigRoundTripCarriesEveryReconfigurableParameter) {
   s.display.showCellWidth = 0.25;
   lcp_contact_solver_ros::NodeSettings t;
   ASSERT_EQ(lcp_contact_solver_ros::fromConfig(lcp_contact_solver_ros::toConfig(s), &t), "");
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
-    const lcs::SolverParams& expected = (spec.access & lcs::kParamReconfigure) ? s.solver : t.solver;
-    EXPECT_EQ(lcs::paramText(t.solver, spec.name), lcs::paramText(expected, spec.name)) << spec.name;
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
+    const lcs::core::SolverParams& expected = (spec.access & lcs::core::kParamReconfigure) ? s.solver : t.solver;
+    EXPECT_EQ(lcs::core::paramText(t.solver, spec.name), lcs::core::paramText(expected, spec.name)) << spec.name;
   }
   EXPECT_EQ(t.solver.islands, lcp_contact_solver_ros::NodeSettings().solver.islands);  // start-up only: kept
   EXPECT_EQ(t.display.showTranslation, s.display.showTranslation);
@@ -281,11 +281,11 @@ TEST(ParamTable, ConfigRoundTripCarriesEveryReconfigurableParameter) {
 
 TEST(ParamTable, ServiceOverridesAreTheTablesOverrideColumn) {
   std::set<std::string> expected;
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    if (spec.access & lcs::kParamOverride) expected.insert(spec.name);
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    if (spec.access & lcs::core::kParamOverride) expected.insert(spec.name);
   const std::vector<std::string> names = lcp_contact_solver_ros::overridableNames();
   EXPECT_EQ(std::set<std::string>(names.begin(), names.end()), expected);
-  lcs::SolverParams p = defaultSolverParams();
+  lcs::core::SolverParams p = defaultSolverParams();
   EXPECT_NE(lcp_contact_solver_ros::applyOverride("initial_guess=false", &p).find("not a solver parameter"),
             std::string::npos);
   EXPECT_EQ(lcp_contact_solver_ros::applyOverride("threads = 2", &p), "");
@@ -313,25 +313,25 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
     const std::string name = cells[0].substr(1, cells[0].find('`', 1) - 1);
     rows[name] = cells;
   }
-  const lcs::SolverParams node = defaultSolverParams();
-  const std::map<lcs::ParamType, std::string> types = {{lcs::ParamType::kDouble, "double"},
-                                                       {lcs::ParamType::kInt, "int"},
-                                                       {lcs::ParamType::kBool, "bool"},
-                                                       {lcs::ParamType::kEnum, "string"}};
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) {
+  const lcs::core::SolverParams node = defaultSolverParams();
+  const std::map<lcs::core::ParamType, std::string> types = {{lcs::core::ParamType::kDouble, "double"},
+                                                       {lcs::core::ParamType::kInt, "int"},
+                                                       {lcs::core::ParamType::kBool, "bool"},
+                                                       {lcs::core::ParamType::kEnum, "string"}};
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
     ASSERT_EQ(rows.count(spec.name), 1u) << spec.name << " has no README row";
     const std::vector<std::string>& cells = rows[spec.name];
     ASSERT_GE(cells.size(), 6u) << spec.name;
     EXPECT_EQ(cells[1], types.at(spec.type)) << spec.name;
     const std::string shown = cells[2].substr(0, cells[2].find(' '));
-    const std::string value = lcs::paramText(node, spec.name);
-    if (spec.type == lcs::ParamType::kDouble || spec.type == lcs::ParamType::kInt) {
+    const std::string value = lcs::core::paramText(node, spec.name);
+    if (spec.type == lcs::core::ParamType::kDouble || spec.type == lcs::core::ParamType::kInt) {
       EXPECT_EQ(std::strtod(shown.c_str(), nullptr), std::strtod(value.c_str(), nullptr)) << spec.name;
     } else {
       EXPECT_EQ(shown, value) << spec.name;
     }
-    const std::string runtime = (spec.access & lcs::kParamReconfigure) ? "yes"
-                                : (spec.access & lcs::kParamOverride) ? "no (service: yes)"
+    const std::string runtime = (spec.access & lcs::core::kParamReconfigure) ? "yes"
+                                : (spec.access & lcs::core::kParamOverride) ? "no (service: yes)"
                                                                        : "no";
     EXPECT_EQ(cells[4], runtime) << spec.name;
     for (const std::string& choice : spec.choices)

@@ -72,7 +72,7 @@ struct Recording {
   bool with_outputs = true;             // record forces and stats
   double reference_scale = 0.0;         // > 0: "reference_forces" = solved forces × this (from outside)
   bool block_sparse = false;
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
 };
 
 // The test scene with cycle-dependent d_free (so warm starts matter), solved in order by
@@ -122,7 +122,7 @@ void writeRecording(const std::string& path, const Recording& rec) {
   bag.close();
 }
 
-ReplayResult replayFile(const std::string& path, const lcs::SolverParams& params = defaultSolverParams(),
+ReplayResult replayFile(const std::string& path, const lcs::core::SolverParams& params = defaultSolverParams(),
                         ReplayOptions options = ReplayOptions()) {
   options.bag = path;
   options.keep_cycles = true;
@@ -186,7 +186,7 @@ TEST(Replay, ReproducesTheRecordedForcesExactly) {
 TEST(Replay, WarmStartCarriesAcrossCyclesAsInTheNode) {
   const std::string bag = tmpFile("warm.bag");
   writeRecording(bag, Recording());
-  lcs::SolverParams cold = defaultSolverParams();
+  lcs::core::SolverParams cold = defaultSolverParams();
   ASSERT_EQ(applyReplayOverride("initial_guess=false", &cold), "");
   const ReplayResult r = replayFile(bag, cold);
   ASSERT_EQ(r.error, "");
@@ -417,7 +417,7 @@ TEST(Replay, WritesOutputBagCsvAndParameters) {
   }
   // The parameters beside it, and the output bag is itself a recording: replaying it with
   // those parameters reproduces it exactly.
-  lcs::SolverParams written = defaultSolverParams();
+  lcs::core::SolverParams written = defaultSolverParams();
   ASSERT_EQ(loadParamsFile(paramsFileBeside(out_bag), &written), "");
   EXPECT_EQ(written.maxIt, 3);
   EXPECT_EQ(runCommand({out_bag, "--tolerance-compare", "0"}, &out), 0) << out;
@@ -443,9 +443,9 @@ TEST(Replay, RefusesToOverwriteItsInput) {
 // ---- parameters ------------------------------------------------------------------------
 
 TEST(ReplayParams, ShippedDefaultsFileIsTheNodeDefaults) {
-  lcs::SolverParams p = defaultSolverParams();
+  lcs::core::SolverParams p = defaultSolverParams();
   ASSERT_EQ(loadParamsFile(LCS_CONFIG_DIR "/default.yaml", &p), "");
-  const lcs::SolverParams d = defaultSolverParams();
+  const lcs::core::SolverParams d = defaultSolverParams();
   EXPECT_EQ(p.tolerance, d.tolerance);
   EXPECT_EQ(p.maxIt, d.maxIt);
   EXPECT_EQ(p.mu, d.mu);
@@ -455,27 +455,27 @@ TEST(ReplayParams, ShippedDefaultsFileIsTheNodeDefaults) {
 }
 
 TEST(ReplayParams, RoundTripOverridesAndFaults) {
-  lcs::SolverParams p = defaultSolverParams();
+  lcs::core::SolverParams p = defaultSolverParams();
   for (const char* o : {"tolerance=1e-7", "maxIt=77", "mu=0.25", "initial_guess=false", "solver=apgd",
                         "stopping_rule=sofa", "sor=1.2", "regularizationTerm=1e-9", "max_rows=500",
                         "erp=0.3", "constraint_level=velocity", "time_step=0.01", "islands=false", "threads=2"})
     ASSERT_EQ(applyReplayOverride(o, &p), "") << o;
   const std::string path = tmpFile("round.params.yaml");
   ASSERT_EQ(writeParamsFile(path, p), "");
-  lcs::SolverParams q = defaultSolverParams();
+  lcs::core::SolverParams q = defaultSolverParams();
   ASSERT_EQ(loadParamsFile(path, &q), "");
   EXPECT_EQ(q.tolerance, 1e-7);
   EXPECT_EQ(q.maxIt, 77);
   EXPECT_EQ(q.mu, 0.25);
   EXPECT_FALSE(q.initial_guess);
-  EXPECT_EQ(q.solver, lcs::SolverKind::kApgd);
-  EXPECT_EQ(q.stopping_rule, lcs::StoppingRule::kSofa);
+  EXPECT_EQ(q.solver, lcs::core::SolverKind::kApgd);
+  EXPECT_EQ(q.stopping_rule, lcs::core::StoppingRule::kSofa);
   EXPECT_EQ(q.sor, 1.2);
   EXPECT_EQ(q.regularizationTerm, 1e-9);
   EXPECT_EQ(q.max_rows, 500);
   // Every parameter of the table is written, so the file reproduces the solve exactly.
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs())
-    EXPECT_EQ(lcs::paramText(q, spec.name), lcs::paramText(p, spec.name)) << spec.name;
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    EXPECT_EQ(lcs::core::paramText(q, spec.name), lcs::core::paramText(p, spec.name)) << spec.name;
 
   EXPECT_NE(applyReplayOverride("initial_guess=maybe", &p), "");
   EXPECT_NE(applyReplayOverride("nosuch=1", &p), "");
@@ -615,8 +615,8 @@ TEST(ReferenceTopic, NeverTakenAsTheRecordedOutputAndMustExist) {
   rec.unpaired_cycle = -1;
   writeRecording(partial, rec);
   options.reference_topic = "/reference_forces";
-  lcs::SolverParams failing = defaultSolverParams();
-  failing.solver = lcs::SolverKind::kLemke;
+  lcs::core::SolverParams failing = defaultSolverParams();
+  failing.solver = lcs::core::SolverKind::kLemke;
   failing.maxIt = 1;  // Lemke's cap: no forces
   r = replayFile(partial, failing, options);
   ASSERT_EQ(r.error, "");
@@ -627,14 +627,14 @@ TEST(ReferenceTopic, NeverTakenAsTheRecordedOutputAndMustExist) {
 // ---- the independent check of a recorded answer -------------------------------------------
 
 // The index of the first contact of `type` with a positive normal force.
-int pressedContact(const CycleOutput& out, lcs::ContactType type) {
+int pressedContact(const CycleOutput& out, lcs::core::ContactType type) {
   for (std::size_t i = 0; i < out.problem.contacts.size(); ++i)
     if (out.problem.contacts[i].type == type && out.forces.forces[i].lambda[0] > 1e-6) return static_cast<int>(i);
   return -1;
 }
 
 TEST(AnswerCheck, TheSolvedAnswerPassesEveryCorruptionFails) {
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   params.tolerance = 1e-10;
   CycleSolver solver(params);
   const Scene scene = makeScene(9100, ros::Time(5.0));
@@ -649,8 +649,8 @@ TEST(AnswerCheck, TheSolvedAnswerPassesEveryCorruptionFails) {
   EXPECT_TRUE(all.add(good, &out.stats, params, ros::Time(5.0)));
   EXPECT_TRUE(all.passed());
 
-  const int frictional = pressedContact(out, lcs::ContactType::kFrictional);
-  const int frictionless = pressedContact(out, lcs::ContactType::kFrictionless);
+  const int frictional = pressedContact(out, lcs::core::ContactType::kFrictional);
+  const int frictionless = pressedContact(out, lcs::core::ContactType::kFrictionless);
   ASSERT_GE(frictional, 0) << "the test scene should press a frictional contact";
   ASSERT_GE(frictionless, 0) << "the test scene should press a frictionless contact";
   auto judged = [&](const ConstraintForces& forces, AnswerCheck* check = nullptr) {
@@ -676,7 +676,7 @@ TEST(AnswerCheck, TheSolvedAnswerPassesEveryCorruptionFails) {
   }
   {  // friction beyond the cone
     ConstraintForces f = out.forces;
-    const double mu = lcs::effectiveMu(out.problem, params.mu)[frictional];
+    const double mu = lcs::core::effectiveMu(out.problem, params.mu)[frictional];
     f.forces[frictional].lambda[1] = 2.0 * mu * f.forces[frictional].lambda[0];
     AnswerCheck c;
     EXPECT_FALSE(judged(f, &c));
@@ -707,7 +707,7 @@ TEST(AnswerCheck, TheSolvedAnswerPassesEveryCorruptionFails) {
 }
 
 TEST(AnswerCheck, ReplayFlagsARecordingWhoseForcesWereCorrupted) {
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   params.tolerance = 1e-10;
   for (const double scale : {1.0, 1.0 + 1e-6}) {
     const std::string bag = tmpFile("answers.bag");
@@ -753,8 +753,8 @@ std::vector<fs::path> shippedBags(bool mujoco) {
   return bags;
 }
 
-lcs::SolverParams recordedParams(const fs::path& bag) {
-  lcs::SolverParams params = defaultSolverParams();
+lcs::core::SolverParams recordedParams(const fs::path& bag) {
+  lcs::core::SolverParams params = defaultSolverParams();
   const std::string params_file = paramsFileBeside(bag.string());
   EXPECT_TRUE(fs::exists(params_file)) << params_file;
   EXPECT_EQ(loadParamsFile(params_file, &params), "");
@@ -803,8 +803,8 @@ TEST(ShippedBags, MujocoReferenceReplayMatchesMujocosForces) {
 TEST(ShippedBags, MujocoReferenceCatchesAnInexactSolve) {
   for (const fs::path& bag : shippedBags(true)) {
     SCOPED_TRACE(bag.string());
-    lcs::SolverParams loose = recordedParams(bag);
-    loose.solver = lcs::SolverKind::kPgs;
+    lcs::core::SolverParams loose = recordedParams(bag);
+    loose.solver = lcs::core::SolverKind::kPgs;
     loose.tolerance = 1e-6;
     ReplayOptions options;
     options.reference_topic = kMujocoReferenceTopic;
@@ -856,7 +856,7 @@ TEST(ShippedBags, ChangeDetectorReplayReproducesTheRecordedForces) {
 TEST(ShippedBags, EveryRecordedAnswerSolvesItsOwnProblem) {
   for (const fs::path& bag : shippedBags(false)) {
     SCOPED_TRACE(bag.string());
-    const lcs::SolverParams params = recordedParams(bag);
+    const lcs::core::SolverParams params = recordedParams(bag);
     ReplayOptions options;
     options.recorded_params = params;
     const ReplayResult r = replayFile(bag.string(), params, options);

@@ -70,7 +70,7 @@ TEST(ReplayLive, LiveNodeMatchesOfflineReplay) {
   pnh.getParam("timeout", timeout);
 
   // The offline path first: what the node must produce.
-  lcs::SolverParams params = defaultSolverParams();
+  lcs::core::SolverParams params = defaultSolverParams();
   ASSERT_EQ(loadParamsFile(params_file, &params), "");
   ReplayOptions options;
   options.bag = bag;

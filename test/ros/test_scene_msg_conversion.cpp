@@ -19,9 +19,9 @@ namespace ros_layer = lcp_contact_solver_ros;
 
 namespace {
 
-Eigen::MatrixXd dense(const lcs::ComplianceMatrix& W) {
+Eigen::MatrixXd dense(const lcs::core::ComplianceMatrix& W) {
   if (const auto* d = std::get_if<Eigen::MatrixXd>(&W)) return *d;
-  return std::get<lcs::BlockSparseMatrix>(W).toDense();
+  return std::get<lcs::core::BlockSparseMatrix>(W).toDense();
 }
 
 std_msgs::Header header(double t) {
@@ -47,13 +47,13 @@ void expectRoundTrip(const std::string& name) {
   EXPECT_EQ(contacts.header.stamp, compliance.header.stamp);
   ASSERT_EQ(contacts.contacts.size(), sp.frames.size());
 
-  lcs::Problem back;
+  lcs::core::Problem back;
   std::vector<ros_layer::ContactFrame> frames;
   ASSERT_EQ(ros_layer::toProblem(contacts, compliance, 0, &back, &frames), "") << name;
   ASSERT_EQ(back.contacts.size(), sp.problem.contacts.size());
   for (std::size_t i = 0; i < back.contacts.size(); ++i) {
-    const lcs::Contact& a = sp.problem.contacts[i];
-    const lcs::Contact& b = back.contacts[i];
+    const lcs::core::Contact& a = sp.problem.contacts[i];
+    const lcs::core::Contact& b = back.contacts[i];
     EXPECT_EQ(b.id, a.id);
     EXPECT_EQ(b.type, a.type);
     EXPECT_EQ(b.rows, a.rows);
@@ -69,9 +69,9 @@ void expectRoundTrip(const std::string& name) {
   EXPECT_EQ(dense(back.W), dense(sp.problem.W));
 
   // The node's solve of the received problem equals the in-process solve.
-  lcs::ContactSolver direct(sim->params().solver), through(sim->params().solver);
-  const lcs::SolveResult a = direct.solve(sp.problem);
-  const lcs::SolveResult b = through.solve(back);
+  lcs::core::ContactSolver direct(sim->params().solver), through(sim->params().solver);
+  const lcs::core::SolveResult a = direct.solve(sp.problem);
+  const lcs::core::SolveResult b = through.solve(back);
   ASSERT_EQ(a.forces.size(), b.forces.size());
   EXPECT_LE((a.forces - b.forces).lpNorm<Eigen::Infinity>(), 1e-12 * (1.0 + a.forces.lpNorm<Eigen::Infinity>()));
 
@@ -101,15 +101,15 @@ TEST(SceneMsgConversion, BodyFormRoundTripsAndSolvesUnbuilt) {
   EXPECT_EQ(compliance.header.stamp, contacts.header.stamp);
   EXPECT_TRUE(compliance.data.empty());
   EXPECT_TRUE(compliance.block_data.empty());
-  lcs::Problem back;
+  lcs::core::Problem back;
   std::vector<ros_layer::ContactFrame> frames;
   ASSERT_EQ(ros_layer::toProblem(contacts, compliance, 0, &back, &frames), "");
   ASSERT_TRUE(back.bodies);
   EXPECT_EQ(back.bodies->toDense(), sp.problem.bodies->toDense());
   EXPECT_EQ(back.d_free, sp.problem.d_free);
-  lcs::ContactSolver direct(sim.params().solver), through(sim.params().solver);
-  const lcs::SolveResult a = direct.solve(sp.problem);
-  const lcs::SolveResult b = through.solve(back);
+  lcs::core::ContactSolver direct(sim.params().solver), through(sim.params().solver);
+  const lcs::core::SolveResult a = direct.solve(sp.problem);
+  const lcs::core::SolveResult b = through.solve(back);
   EXPECT_TRUE(a.unbuilt);
   EXPECT_TRUE(b.unbuilt);
   EXPECT_EQ(a.forces, b.forces) << "the same body form, bit for bit";

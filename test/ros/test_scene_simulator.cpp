@@ -220,7 +220,7 @@ TEST_F(SceneSimulatorTest, ClosedLoopMatchesInProcessSimulator) {
   for (long long k = 0; k < steps_; ++k) {
     const ros::Time stamp = stepStamp(k, sim.params().dt);
     const scene::StepStats stats = sim.step();
-    const lcs::Problem& problem = sim.lastProblem().problem;
+    const lcs::core::Problem& problem = sim.lastProblem().problem;
     // Same contacts (ids, order) and the same forces by id.
     const auto contacts = recording_->contacts.find(stamp);
     if (problem.contacts.empty()) {

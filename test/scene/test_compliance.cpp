@@ -21,8 +21,8 @@ void checkCompliance(const Scene& scene, const std::vector<SceneContact>& frames
   const Eigen::MatrixXd J = model.denseJacobian();
   const Eigen::MatrixXd reference = dt * dt * J * model.denseInverseMass() * J.transpose();
   const Eigen::MatrixXd dense = std::get<Eigen::MatrixXd>(model.compliance(dt, ComplianceStorage::kDense));
-  const ComplianceMatrix sparse_w = model.compliance(dt, ComplianceStorage::kBlockSparse);
-  const BlockSparseMatrix& sparse = std::get<BlockSparseMatrix>(sparse_w);
+  const core::ComplianceMatrix sparse_w = model.compliance(dt, ComplianceStorage::kBlockSparse);
+  const core::BlockSparseMatrix& sparse = std::get<core::BlockSparseMatrix>(sparse_w);
   EXPECT_EQ(sparse.validate(), "");
   const double scale = reference.cwiseAbs().maxCoeff();
   EXPECT_LE((dense - reference).cwiseAbs().maxCoeff(), 1e-14 * scale);
@@ -70,8 +70,8 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
   const auto frames = gen.generate();
   ASSERT_EQ(frames.size(), 1u);
   for (ComplianceStorage storage : {ComplianceStorage::kDense, ComplianceStorage::kBlockSparse}) {
-    const Problem p = buildProblem(s, frames, freeVelocities(s, dt), dt, storage);
-    const Eigen::MatrixXd W = toDense(p.W);
+    const core::Problem p = buildProblem(s, frames, freeVelocities(s, dt), dt, storage);
+    const Eigen::MatrixXd W = core::toDense(p.W);
     ASSERT_EQ(W.rows(), 3);
     // At the bottom point r ∥ n: the normal row sees only the mass.
     EXPECT_NEAR(W(0, 0), dt * dt / m, 1e-15);
@@ -95,7 +95,7 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
     ContactGenerator g(t);
     const auto f = g.generate();
     ASSERT_EQ(f.size(), 1u);
-    const Eigen::MatrixXd W = toDense(buildProblem(t, f, freeVelocities(t, dt), dt, ComplianceStorage::kBlockSparse).W);
+    const Eigen::MatrixXd W = core::toDense(buildProblem(t, f, freeVelocities(t, dt), dt, ComplianceStorage::kBlockSparse).W);
     EXPECT_NEAR(W(0, 0), dt * dt / m, 1e-15);
     EXPECT_NEAR(W(1, 1), 3.5 * dt * dt / m, 1e-15);
     EXPECT_NEAR(W(2, 2), 3.5 * dt * dt / m, 1e-15);
@@ -107,11 +107,11 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
   ContactGenerator gen2(s);
   const auto pen = gen2.generate();
   ASSERT_EQ(pen.size(), 1u);
-  Problem p = buildProblem(s, pen, freeVelocities(s, dt), dt, ComplianceStorage::kDense);
+  core::Problem p = buildProblem(s, pen, freeVelocities(s, dt), dt, ComplianceStorage::kDense);
   EXPECT_NEAR(p.d_free[0], dt * (-0.2 - 9.81 * dt), 1e-15);
   EXPECT_NEAR(p.contacts[0].gap, -gap, 1e-12);
   EXPECT_EQ(p.contacts[0].erp, 0.2);
-  ASSERT_EQ(applyStabilization(SolverParams(), &p), "");
+  ASSERT_EQ(core::applyStabilization(core::SolverParams(), &p), "");
   EXPECT_NEAR(p.d_free[0], -0.2 * gap + dt * (-0.2 - 9.81 * dt), 1e-15);
 }
 
@@ -123,7 +123,7 @@ TEST(Compliance, DenseEqualsBlockSparseOnScenes) {
     for (int k = 0; k < 30; ++k) sim.step();
     const StepProblem& sp = sim.buildStep();
     checkCompliance(sim.scene(), sp.frames, sp.dt);
-    EXPECT_EQ(validateProblem(sp.problem), "");
+    EXPECT_EQ(core::validateProblem(sp.problem), "");
     sim.applyForces(Eigen::VectorXd::Zero(sp.problem.rowCount()));
   }
 }

@@ -31,7 +31,7 @@ Scene ballOnGround(double torsional, double rolling, double dt) {
   s.name = "ball_on_ground";
   s.params.dt = dt;
   s.params.erp = 0.2;
-  s.params.solver.solver = SolverKind::kNlgs;
+  s.params.solver.solver = core::SolverKind::kNlgs;
   s.params.solver.tolerance = 1e-12;
   s.params.solver.maxIt = 5000;
   s.params.friction_pairs.push_back({"ball", "ground", 0.5, torsional, rolling});
@@ -49,7 +49,7 @@ TEST(TorsionalFriction, SpinningBallDeceleratesByTheTorsionalLaw) {
   const double alpha = mu_tor * kMass * kG / kInertia;  // 24.5 rad/s²
   sim.run(0.2);
   ASSERT_EQ(sim.lastProblem().problem.contacts.size(), 1u);
-  EXPECT_EQ(sim.lastProblem().problem.contacts[0].type, ContactType::kTorsional);
+  EXPECT_EQ(sim.lastProblem().problem.contacts[0].type, core::ContactType::kTorsional);
   EXPECT_EQ(sim.lastProblem().problem.rowCount(), 4);
   EXPECT_NEAR(sim.body("ball").angular_velocity.z(), w0 - alpha * sim.time(), 0.01 * w0);
   sim.run(0.4);  // stops at w0 / α = 0.41 s, and does not turn back
@@ -71,7 +71,7 @@ TEST(RollingFriction, RollingBallDeceleratesByTheRollingLawAndStops) {
   sim.setBodyVelocity(sim.scene().requireBody("ball"), Eigen::Vector3d(v0, 0, 0), Eigen::Vector3d(0, v0 / kR, 0));
   const double a = mu_roll * kG / (kR * (1.0 + kInertia / (kMass * kR * kR)));  // 0.350 m/s²
   sim.run(1.0);
-  EXPECT_EQ(sim.lastProblem().problem.contacts[0].type, ContactType::kRolling);
+  EXPECT_EQ(sim.lastProblem().problem.contacts[0].type, core::ContactType::kRolling);
   EXPECT_NEAR(sim.body("ball").linear_velocity.x(), v0 - a * sim.time(), 0.01 * v0);
   // Still rolling without slipping: v = ω r.
   EXPECT_NEAR(sim.body("ball").linear_velocity.x(), sim.body("ball").angular_velocity.y() * kR, 1e-6);
@@ -127,7 +127,7 @@ TEST(ContactRows, EachPairPaysForTheRowsItAsksFor) {
     s.bodies.push_back(dynamicBody(names[i], sphereShape(kR), kMass, Eigen::Vector3d(0.5 * i, 0, kR)));
   SceneSimulator sim(std::move(s));
   sim.step();
-  const Problem& p = sim.lastProblem().problem;
+  const core::Problem& p = sim.lastProblem().problem;
   ASSERT_EQ(p.contacts.size(), 4u);
   std::map<std::string, int> rows;
   for (std::size_t c = 0; c < p.contacts.size(); ++c) {

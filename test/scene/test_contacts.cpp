@@ -36,7 +36,7 @@ TEST(Contacts, SphereOnPlaneIsExact) {
   EXPECT_NEAR(f.tangent2.dot(f.normal), 0.0, 1e-15);
   EXPECT_NEAR((f.tangent1.cross(f.tangent2) - f.normal).norm(), 0.0, 1e-15);  // right-handed (t1, t2, n)
   EXPECT_NEAR((f.tangent1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);  // n × x
-  EXPECT_EQ(f.type, ContactType::kFrictional);
+  EXPECT_EQ(f.type, core::ContactType::kFrictional);
   EXPECT_EQ(f.rows, 3);
   EXPECT_DOUBLE_EQ(f.mu, s.params.mu);
   EXPECT_EQ(f.id, makeContactId(1, 0, 0));
@@ -184,23 +184,23 @@ TEST(Contacts, PerPairFrictionAndFrictionlessRows) {
   int slick = 0, grip = 0, ball = 0;
   for (std::size_t i = 0; i < sp.frames.size(); ++i) {
     const SceneContact& f = sp.frames[i];
-    const Contact& c = sp.problem.contacts[i];
+    const core::Contact& c = sp.problem.contacts[i];
     EXPECT_EQ(c.id, f.id);
     EXPECT_EQ(c.type, f.type);
     EXPECT_EQ(c.rows, f.rows);
     if (f.body_a_name == "box_slick" && f.body_b_name == "ground_plane") {
       ++slick;
-      EXPECT_EQ(c.type, ContactType::kFrictionless);
+      EXPECT_EQ(c.type, core::ContactType::kFrictionless);
       EXPECT_EQ(c.rows, 1);
       EXPECT_EQ(c.mu, 0.0);
     } else if (f.body_a_name == "box_grip") {
       ++grip;
-      EXPECT_EQ(c.type, ContactType::kFrictional);
+      EXPECT_EQ(c.type, core::ContactType::kFrictional);
       EXPECT_EQ(c.rows, 3);
       EXPECT_DOUBLE_EQ(c.mu, 0.5);
     } else {
       ++ball;
-      EXPECT_EQ(c.type, ContactType::kFrictional);
+      EXPECT_EQ(c.type, core::ContactType::kFrictional);
     }
   }
   EXPECT_EQ(slick, 4);

@@ -30,16 +30,16 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 void expectHonestStep(const SceneSimulator& sim, int step) {
   const StepStats& st = sim.lastStats();
   if (!st.solved) return;
-  const SolveResult& r = sim.lastSolve();
+  const core::SolveResult& r = sim.lastSolve();
   ASSERT_TRUE(r.forces.allFinite()) << "step " << step;
   ASSERT_TRUE(r.d.allFinite()) << "step " << step;
   ASSERT_TRUE(std::isfinite(r.residual)) << "step " << step;
-  EXPECT_EQ(r.converged, r.status == SolveStatus::kConverged) << "step " << step;
+  EXPECT_EQ(r.converged, r.status == core::SolveStatus::kConverged) << "step " << step;
   if (r.converged) {
     EXPECT_LE(r.residual, sim.params().solver.tolerance) << "step " << step;
   } else {
-    EXPECT_TRUE(r.status == SolveStatus::kMaxIterations || r.status == SolveStatus::kTimeBudget)
-        << "step " << step << ": " << statusName(r.status) << ": " << r.message;
+    EXPECT_TRUE(r.status == core::SolveStatus::kMaxIterations || r.status == core::SolveStatus::kTimeBudget)
+        << "step " << step << ": " << core::statusName(r.status) << ": " << r.message;
   }
 }
 
@@ -59,7 +59,7 @@ struct StackRun {
 
 constexpr int kStackBoxes = 50;
 
-StackRun runStack(const SolverParams& solver, int steps) {
+StackRun runStack(const core::SolverParams& solver, int steps) {
   Scene s;
   s.name = "stack50";
   s.params.dt = 0.01;
@@ -116,8 +116,8 @@ void printRun(const char* name, const StackRun& r) {
 // newton (the solver for rank-deficient stacks), tolerance 1e-8: converges every step;
 // bounds: drift < 1 µm, energy gain < 1e-6 J, ground force = the stack's weight within 1e-6.
 TEST(HardScenes, FiftyBoxStackNewton) {
-  SolverParams p = SceneParams::defaultSceneSolverParams();
-  p.solver = SolverKind::kNewton;
+  core::SolverParams p = SceneParams::defaultSceneSolverParams();
+  p.solver = core::SolverKind::kNewton;
   p.tolerance = 1e-8;
   p.maxIt = 200;
   const StackRun r = runStack(p, 300);
@@ -135,8 +135,8 @@ TEST(HardScenes, FiftyBoxStackNewton) {
 // (the 50 interfaces each yield by about r λ plus the erp-balanced penetration: the top box
 // sinks by their sum, ~2 cm), ground force = the weight within 1%.
 TEST(HardScenes, FiftyBoxStackRegularizedNlgs) {
-  SolverParams p = SceneParams::defaultSceneSolverParams();
-  p.solver = SolverKind::kNlgs;
+  core::SolverParams p = SceneParams::defaultSceneSolverParams();
+  p.solver = core::SolverKind::kNlgs;
   p.tolerance = 1e-4;
   p.maxIt = 300;
   p.regularizationTerm = 1e-6;
@@ -155,8 +155,8 @@ TEST(HardScenes, FiftyBoxStackRegularizedNlgs) {
 // "Numerical robustness"). Asserted: honest statuses, finite state, no blow-up (energy gain
 // < 5 J, drift < 0.2 m over these 100 steps).
 TEST(HardScenes, FiftyBoxStackPlainNlgsFailsHonestly) {
-  SolverParams p = SceneParams::defaultSceneSolverParams();
-  p.solver = SolverKind::kNlgs;
+  core::SolverParams p = SceneParams::defaultSceneSolverParams();
+  p.solver = core::SolverKind::kNlgs;
   p.tolerance = 1e-4;
   p.maxIt = 200;
   const StackRun r = runStack(p, 100);
@@ -186,7 +186,7 @@ TEST(HardScenes, FiveHundredSpherePileSettles) {
   s.params.mu = 0.4;
   s.params.contact_margin = 0.02;
   s.params.compliance = ComplianceStorage::kBlockSparse;
-  s.params.solver.solver = SolverKind::kNlgs;
+  s.params.solver.solver = core::SolverKind::kNlgs;
   s.params.solver.tolerance = 1e-4;
   s.params.solver.maxIt = 200;
   s.bodies.push_back(ground());

@@ -62,8 +62,8 @@ MujocoOptions tightPgs(const std::string& cone, int iterations) {
   return o;
 }
 
-SolverParams params(SolverKind kind, double tolerance, int max_it) {
-  SolverParams p;
+core::SolverParams params(core::SolverKind kind, double tolerance, int max_it) {
+  core::SolverParams p;
   p.solver = kind;
   p.tolerance = tolerance;
   p.maxIt = max_it;
@@ -136,7 +136,7 @@ TEST(MujocoFacts, PyramidEdgesDecodeLikeMjContactForce) {
       ++contacts;
     }
     // Every kept row is a unilateral one-row contact (limits, frictionless, edges).
-    for (const Contact& contact : mp.problem.contacts) EXPECT_EQ(contact.type, ContactType::kFrictionless);
+    for (const core::Contact& contact : mp.problem.contacts) EXPECT_EQ(contact.type, core::ContactType::kFrictionless);
   });
   EXPECT_GT(contacts, 50);
 }
@@ -146,20 +146,20 @@ TEST(MujocoFacts, PyramidEdgesDecodeLikeMjContactForce) {
 TEST(MujocoCrossCheck, HumanoidPyramidalMatchesMujocoPgs) {
   if (!haveModel(kHumanoid)) GTEST_SKIP() << kHumanoid << " missing (libmujoco-samples)";
   auto world = loadWorld(kHumanoid, tightPgs("pyramidal", 3000));
-  ContactSolver pgs(params(SolverKind::kPgs, 1e-13, 200000));
-  ContactSolver newton(params(SolverKind::kNewton, 1e-13, 2000));
-  const SolverParams lemke = params(SolverKind::kLemke, 1e-13, 100000);
+  core::ContactSolver pgs(params(core::SolverKind::kPgs, 1e-13, 200000));
+  core::ContactSolver newton(params(core::SolverKind::kNewton, 1e-13, 2000));
+  const core::SolverParams lemke = params(core::SolverKind::kLemke, 1e-13, 100000);
   double worst_lemke = 0, worst_pgs = 0, worst_newton = 0, worst_mujoco_residual = 0;
   int steps = 0, max_rows = 0;
   runCrossCheck(*world, 400, MujocoExtractOptions(), [&](int s, const MujocoProblem& mp) {
     ++steps;
     max_rows = std::max(max_rows, mp.problem.rowCount());
     worst_mujoco_residual = std::max(worst_mujoco_residual, problemResidual(mp, mp.mujoco_lambda));
-    const SolveResult a = solveProblem(mp.problem, lemke);
+    const core::SolveResult a = core::solveProblem(mp.problem, lemke);
     ASSERT_TRUE(a.converged) << "step " << s << ": " << a.message;
-    const SolveResult b = pgs.solve(mp.problem);
+    const core::SolveResult b = pgs.solve(mp.problem);
     ASSERT_TRUE(b.converged) << "step " << s << ": " << b.message;
-    const SolveResult c = newton.solve(mp.problem);
+    const core::SolveResult c = newton.solve(mp.problem);
     ASSERT_TRUE(c.converged) << "step " << s << ": " << c.message;
     const ForceComparison ca = compareForces(mp, a.forces), cb = compareForces(mp, b.forces),
                           cc = compareForces(mp, c.forces);
@@ -181,7 +181,7 @@ TEST(MujocoCrossCheck, ParticlePyramidalMatchesMujocoPgs) {
   // 200 MuJoCo sweeps from its warm start bring this frictionless pile to its fixed point
   // (residual ~1e-15 in the package's measure); 1000 change nothing but the run time.
   auto world = loadWorld(kParticle, tightPgs("pyramidal", 200));
-  ContactSolver pgs(params(SolverKind::kPgs, 1e-10, 200000));
+  core::ContactSolver pgs(params(core::SolverKind::kPgs, 1e-10, 200000));
   double worst = 0, worst_mujoco_residual = 0;
   int steps = 0, max_rows = 0;
   runCrossCheck(*world, kParticleSteps, MujocoExtractOptions(), [&](int s, const MujocoProblem& mp) {
@@ -189,7 +189,7 @@ TEST(MujocoCrossCheck, ParticlePyramidalMatchesMujocoPgs) {
     max_rows = std::max(max_rows, mp.problem.rowCount());
     EXPECT_EQ(mp.problem.W.index(), mp.problem.rowCount() > MujocoExtractOptions().dense_max_rows ? 1u : 0u);
     worst_mujoco_residual = std::max(worst_mujoco_residual, problemResidual(mp, mp.mujoco_lambda));
-    const SolveResult r = pgs.solve(mp.problem);
+    const core::SolveResult r = pgs.solve(mp.problem);
     ASSERT_TRUE(r.converged) << "step " << s << ": " << r.message;
     const ForceComparison c = compareForces(mp, r.forces);
     EXPECT_LE(c.max_rel, 1e-6) << "pgs, step " << s;
@@ -205,7 +205,7 @@ TEST(MujocoCrossCheck, ParticlePyramidalMatchesMujocoPgs) {
 TEST(MujocoCrossCheck, ScalingAndStorageDoNotChangeTheAnswer) {
   if (!haveModel(kHumanoid)) GTEST_SKIP() << kHumanoid << " missing (libmujoco-samples)";
   auto world = loadWorld(kHumanoid, tightPgs("pyramidal", 3000));
-  const SolverParams lemke = params(SolverKind::kLemke, 1e-13, 100000);
+  const core::SolverParams lemke = params(core::SolverKind::kLemke, 1e-13, 100000);
   MujocoExtractOptions unscaled;
   unscaled.scale_rows = false;
   MujocoExtractOptions sparse;
@@ -217,10 +217,10 @@ TEST(MujocoCrossCheck, ScalingAndStorageDoNotChangeTheAnswer) {
     ASSERT_EQ(extractProblem(world->model(), world->data(), unscaled, &a), "");
     ASSERT_EQ(extractProblem(world->model(), world->data(), sparse, &b), "");
     ASSERT_EQ(b.problem.W.index(), 1u);
-    EXPECT_LT((toDense(b.problem.W) - toDense(mp.problem.W)).cwiseAbs().maxCoeff(), 1e-14);
-    const Eigen::VectorXd f = mp.toEfcForce(solveProblem(mp.problem, lemke).forces);
-    EXPECT_LT((a.toEfcForce(solveProblem(a.problem, lemke).forces) - f).cwiseAbs().maxCoeff(), 1e-9);
-    EXPECT_LT((b.toEfcForce(solveProblem(b.problem, lemke).forces) - f).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((core::toDense(b.problem.W) - core::toDense(mp.problem.W)).cwiseAbs().maxCoeff(), 1e-14);
+    const Eigen::VectorXd f = mp.toEfcForce(core::solveProblem(mp.problem, lemke).forces);
+    EXPECT_LT((a.toEfcForce(core::solveProblem(a.problem, lemke).forces) - f).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((b.toEfcForce(core::solveProblem(b.problem, lemke).forces) - f).cwiseAbs().maxCoeff(), 1e-9);
     // Limits dropped without folding: a different problem (unless no limit is active).
     ++checked;
   });
@@ -233,13 +233,13 @@ TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {
   MujocoExtractOptions folded;
   folded.include_limits = false;
   folded.fold_dropped = true;
-  const SolverParams lemke = params(SolverKind::kLemke, 1e-13, 100000);
+  const core::SolverParams lemke = params(core::SolverKind::kLemke, 1e-13, 100000);
   int with_limits = 0;
   runCrossCheck(*world, 300, folded, [&](int s, const MujocoProblem& mp) {
     if (mp.dropped_rows.empty()) return;
     ++with_limits;
     for (const MujocoEntry& e : mp.entries) EXPECT_NE(e.kind, MujocoRowKind::kLimit);
-    const SolveResult r = solveProblem(mp.problem, lemke);
+    const core::SolveResult r = core::solveProblem(mp.problem, lemke);
     EXPECT_LE(compareForces(mp, r.forces).max_rel, 1e-6) << "step " << s;
   });
   EXPECT_GT(with_limits, 50);
@@ -249,13 +249,13 @@ TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {
 
 // Our Coulomb solution also solves MuJoCo's relaxation (and so equals it: the relaxation is
 // strictly convex) when no frictional contact slides and every open one has d_n ≥ μ |d_t|.
-bool coulombSolvesTheRelaxation(const MujocoProblem& mp, const SolveResult& r) {
+bool coulombSolvesTheRelaxation(const MujocoProblem& mp, const core::SolveResult& r) {
   const std::vector<int> offsets = mp.problem.rowOffsets();
   for (std::size_t i = 0; i < mp.problem.contacts.size(); ++i) {
-    if (mp.problem.contacts[i].type != ContactType::kFrictional) continue;
-    if (r.states[i] == ContactState::kSlip) return false;
+    if (mp.problem.contacts[i].type != core::ContactType::kFrictional) continue;
+    if (r.states[i] == core::ContactState::kSlip) return false;
     const int p = offsets[i];
-    if (r.states[i] == ContactState::kOpen &&
+    if (r.states[i] == core::ContactState::kOpen &&
         r.d[p] < mp.problem.contacts[i].mu * std::hypot(r.d[p + 1], r.d[p + 2]))
       return false;
   }
@@ -265,16 +265,16 @@ bool coulombSolvesTheRelaxation(const MujocoProblem& mp, const SolveResult& r) {
 TEST(MujocoElliptic, HumanoidDifferencesPerContactState) {
   if (!haveModel(kHumanoid)) GTEST_SKIP() << kHumanoid << " missing (libmujoco-samples)";
   auto world = loadWorld(kHumanoid, tightPgs("elliptic", 3000));
-  ContactSolver newton(params(SolverKind::kNewton, 1e-11, 5000));
-  double state_max[kContactStateCount] = {};
-  int state_count[kContactStateCount] = {};
+  core::ContactSolver newton(params(core::SolverKind::kNewton, 1e-11, 5000));
+  double state_max[core::kContactStateCount] = {};
+  int state_count[core::kContactStateCount] = {};
   int same_steps = 0, other_steps = 0;
   double same_max = 0, other_max = 0;
   runCrossCheck(*world, 1000, MujocoExtractOptions(), [&](int s, const MujocoProblem& mp) {
-    const SolveResult r = newton.solve(mp.problem);
+    const core::SolveResult r = newton.solve(mp.problem);
     ASSERT_TRUE(r.converged) << "step " << s << ": " << r.message;
     const ForceComparison c = compareForces(mp, r.forces, r.states);
-    for (int k = 0; k < kContactStateCount; ++k) {
+    for (int k = 0; k < core::kContactStateCount; ++k) {
       state_count[k] += c.state_count[k];
       if (c.state_count[k] > 0) state_max[k] = std::max(state_max[k], c.state_max_abs[k] / c.scale);
     }
@@ -308,7 +308,7 @@ struct DriveSample {
 };
 
 // Steps `world` with our forces in place of MuJoCo's solver.
-std::vector<DriveSample> drive(MujocoWorld& world, ContactSolver& solver, int steps) {
+std::vector<DriveSample> drive(MujocoWorld& world, core::ContactSolver& solver, int steps) {
   mjModel* m = world.model();
   mjData* d = world.data();
   std::vector<DriveSample> trace;
@@ -320,7 +320,7 @@ std::vector<DriveSample> drive(MujocoWorld& world, ContactSolver& solver, int st
     MujocoProblem mp;
     EXPECT_EQ(extractProblem(m, d, MujocoExtractOptions(), &mp), "");
     if (!mp.problem.contacts.empty()) {
-      const SolveResult r = solver.solve(mp.problem);
+      const core::SolveResult r = solver.solve(mp.problem);
       EXPECT_TRUE(r.converged) << "t = " << d->time << ": " << r.message;
       applyConstraintForces(m, d, mp.toEfcForce(r.forces));
     }
@@ -333,7 +333,7 @@ TEST(MujocoDrive, PyramidalDriveFollowsMujocosOwnTrajectory) {
   if (!haveModel(kHumanoid)) GTEST_SKIP() << kHumanoid << " missing (libmujoco-samples)";
   auto ours = loadWorld(kHumanoid, tightPgs("pyramidal", 3000));
   auto theirs = loadWorld(kHumanoid, tightPgs("pyramidal", 3000));
-  ContactSolver lemke(params(SolverKind::kLemke, 1e-13, 100000));
+  core::ContactSolver lemke(params(core::SolverKind::kLemke, 1e-13, 100000));
   double worst = 0;
   for (int s = 0; s < 250; ++s) {  // 1.25 s: the drop, the landing and the first tumble
     drive(*ours, lemke, 1);
@@ -351,7 +351,7 @@ TEST(MujocoDrive, EllipticCoulombDriveLandsAndRestsStably) {
   MujocoOptions options;
   options.cone = "elliptic";
   auto world = loadWorld(kHumanoid, options);
-  ContactSolver newton(params(SolverKind::kNewton, 1e-10, 5000));
+  core::ContactSolver newton(params(core::SolverKind::kNewton, 1e-10, 5000));
   const std::vector<DriveSample> trace = drive(*world, newton, 1400);  // 7 s
 
   double max_penetration = 0;

@@ -17,7 +17,7 @@ const std::string kDir = LCS_SCENES_DIR;
 constexpr double kG = 9.81;
 
 SceneParams tight(SceneParams p) {
-  p.solver.solver = SolverKind::kNlgs;
+  p.solver.solver = core::SolverKind::kNlgs;
   p.solver.tolerance = 1e-10;
   p.solver.maxIt = 20000;
   return p;
@@ -140,7 +140,7 @@ TEST(Physics, FrictionlessSceneHasNoTangentialForce) {
     sim.step();
     const StepProblem& sp = sim.lastProblem();
     for (std::size_t i = 0; i < sp.frames.size(); ++i) {
-      EXPECT_EQ(sp.problem.contacts[i].type, ContactType::kFrictionless);
+      EXPECT_EQ(sp.problem.contacts[i].type, core::ContactType::kFrictionless);
       EXPECT_EQ(sp.problem.contacts[i].rows, 1);
       ++contacts;
     }

@@ -20,7 +20,7 @@ TEST(PortfolioScene, SpherePileDemoHasNoSolverFailure) {
   // The YAML's own solver block, and demo.launch's overrides (tolerance 1e-9, maxIt 5000).
   for (double tolerance : {1e-8, 1e-9}) {
     SceneParams params = loadSceneParams(kDir + "/sphere_pile.yaml");
-    ASSERT_EQ(params.solver.solver, SolverKind::kAuto);
+    ASSERT_EQ(params.solver.solver, core::SolverKind::kAuto);
     params.solver.tolerance = tolerance;
     params.solver.maxIt = 5000;
     SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/sphere_pile.urdf", params));
@@ -32,8 +32,8 @@ TEST(PortfolioScene, SpherePileDemoHasNoSolverFailure) {
       const StepStats s = sim.step();
       if (!s.solved) continue;
       ++solved;
-      if (s.status != SolveStatus::kConverged && failures++ == 0)
-        first_failure = "step " + std::to_string(k) + ": " + statusName(s.status);
+      if (s.status != core::SolveStatus::kConverged && failures++ == 0)
+        first_failure = "step " + std::to_string(k) + ": " + core::statusName(s.status);
       EXPECT_LE(s.residual, tolerance) << "step " << k;
     }
     EXPECT_GT(solved, steps / 2);

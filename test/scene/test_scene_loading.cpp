@@ -126,7 +126,7 @@ TEST(SceneLoading, YamlParameters) {
   EXPECT_TRUE(p.joint_origins.at("tilt").has_xyz);
   EXPECT_TRUE(p.ground_plane.enabled);
   EXPECT_DOUBLE_EQ(p.ground_plane.height, -0.5);
-  EXPECT_EQ(p.solver.solver, SolverKind::kNlgs);
+  EXPECT_EQ(p.solver.solver, core::SolverKind::kNlgs);
   EXPECT_EQ(p.solver.maxIt, 100);
 
   auto expectYamlError = [](const std::string& text, const std::string& fragment) {
@@ -157,14 +157,14 @@ TEST(SceneLoading, SolverMapTakesEveryTableParameter) {
       "solver: {name: pgs, sor: 1.2, friction_model: pyramid4, islands: false, threads: 1, max_rows: 900,\n"
       "         initial_guess: no, stopping_rule: sofa, time_budget: 0.5}\n",
       "inline.yaml");
-  EXPECT_EQ(p.solver.solver, SolverKind::kPgs);
+  EXPECT_EQ(p.solver.solver, core::SolverKind::kPgs);
   EXPECT_EQ(p.solver.sor, 1.2);
-  EXPECT_EQ(p.solver.friction_model, FrictionModel::kPyramid4);
+  EXPECT_EQ(p.solver.friction_model, core::FrictionModel::kPyramid4);
   EXPECT_FALSE(p.solver.islands);
   EXPECT_EQ(p.solver.threads, 1);
   EXPECT_EQ(p.solver.max_rows, 900);
   EXPECT_FALSE(p.solver.initial_guess);
-  EXPECT_EQ(p.solver.stopping_rule, StoppingRule::kSofa);
+  EXPECT_EQ(p.solver.stopping_rule, core::StoppingRule::kSofa);
   EXPECT_EQ(p.solver.time_budget, 0.5);
   EXPECT_EQ(p.solver.tolerance, SceneParams::defaultSceneSolverParams().tolerance);  // not given: the scene default
 }

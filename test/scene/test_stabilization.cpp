@@ -29,7 +29,7 @@ SceneParams params(double erp, double softness) {
   p.erp = erp;
   p.softness = softness;
   p.mu = 0.5;
-  p.solver.solver = SolverKind::kNlgs;
+  p.solver.solver = core::SolverKind::kNlgs;
   p.solver.tolerance = 1e-11;
   p.solver.maxIt = 20000;
   p.solver.initial_guess = true;

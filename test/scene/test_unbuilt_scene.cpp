@@ -20,7 +20,7 @@ const std::string kDir = LCS_SCENES_DIR;
 SceneParams params(const std::string& name, ComplianceStorage storage, bool build_lcp) {
   SceneParams p = loadSceneParams(kDir + "/" + name + ".yaml");
   p.compliance = storage;
-  p.solver.solver = SolverKind::kNlgs;
+  p.solver.solver = core::SolverKind::kNlgs;
   p.solver.tolerance = 1e-10;
   p.solver.maxIt = 20000;
   p.solver.build_lcp = build_lcp;
@@ -61,15 +61,15 @@ TEST(UnbuiltScene, BodyFormIsTheAssembledW) {
     const StepProblem& sp = sim.buildStep();
     ASSERT_FALSE(sp.problem.contacts.empty());
     ASSERT_TRUE(sp.problem.bodies);
-    EXPECT_EQ(complianceRows(sp.problem.W), 0) << "no W beside the body form";
-    EXPECT_EQ(validateProblem(sp.problem), "");
+    EXPECT_EQ(core::complianceRows(sp.problem.W), 0) << "no W beside the body form";
+    EXPECT_EQ(core::validateProblem(sp.problem), "");
     const RigidContactModel model(sim.scene(), sp.frames);
     const Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(model.compliance(sp.dt, ComplianceStorage::kDense));
     const Eigen::MatrixXd from_bodies = sp.problem.bodies->toDense();
     EXPECT_LE((from_bodies - W).cwiseAbs().maxCoeff(), 1e-14 * W.cwiseAbs().maxCoeff());
     // Same block pattern as the scene's block-sparse W.
-    const BlockSparseMatrix sparse = std::get<BlockSparseMatrix>(model.compliance(sp.dt, ComplianceStorage::kBlockSparse));
-    const BlockSparseMatrix assembled = sp.problem.bodies->assemble();
+    const core::BlockSparseMatrix sparse = std::get<core::BlockSparseMatrix>(model.compliance(sp.dt, ComplianceStorage::kBlockSparse));
+    const core::BlockSparseMatrix assembled = sp.problem.bodies->assemble();
     EXPECT_EQ(assembled.block_col, sparse.block_col);
     EXPECT_EQ(assembled.row_start, sparse.row_start);
     // The body form grows with bodies + rows, W with the pairs.

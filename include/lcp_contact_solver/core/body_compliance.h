@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 using BodyMatrix = Eigen::Matrix<double, 6, 6>;
 using BodyVector = Eigen::Matrix<double, 6, 1>;
@@ -77,4 +77,4 @@ Eigen::MatrixXd leadingComplianceWindow(const Problem& problem, int n);
 // y = W x for the problem's compliance, whichever form it has.
 void multiplyCompliance(const Problem& problem, const Eigen::VectorXd& x, Eigen::VectorXd& y);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // Components of |n| within this of the smallest count as tied (the first axis wins).
 // Without it a resting normal (ε₁, ε₂, 1) with rounding-level ε flips t1 between n × x and
@@ -48,4 +48,4 @@ inline ContactFrame frameFromNormal(const Eigen::Vector3d& position, const Eigen
   return f;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -15,7 +15,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 class ContactSolver {
  public:
@@ -53,4 +53,4 @@ class ContactSolver {
 // One-off solve without warm start memory.
 SolveResult solveProblem(const Problem& problem, const SolverParams& params);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -7,7 +7,7 @@
 // does not depend on the thread count.
 #pragma once
 
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/problem.h"
 
 #include <Eigen/Core>
@@ -15,7 +15,7 @@
 #include <functional>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 struct Islands {
   std::vector<int> island_of;              // island of each contact
@@ -66,4 +66,4 @@ class IslandSolver {
 // Worker threads for `threads` = 0 (SolverParams::threads): the core count.
 int defaultThreadCount();
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

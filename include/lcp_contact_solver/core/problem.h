@@ -24,7 +24,7 @@
 #include <variant>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 enum class ContactType : std::uint8_t {
   kFrictional = 0,    // 3 rows: normal, tangent 1, tangent 2 (Coulomb disc)
@@ -129,4 +129,4 @@ Problem makeLcpProblem(const Eigen::MatrixXd& M, const Eigen::VectorXd& q);
 // `max_rows` <= 0 disables the size limit.
 std::string validateProblem(const Problem& problem, int max_rows = 0);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

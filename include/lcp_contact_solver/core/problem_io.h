@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // Thrown with a one-line message naming the file and the fault.
 class ProblemFileError : public std::runtime_error {
@@ -30,4 +30,4 @@ Problem readFclibHdf5(const std::string& path);
 // Dispatches on the content (HDF5 signature) rather than the extension.
 Problem readProblemFile(const std::string& path);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

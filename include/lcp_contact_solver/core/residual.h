@@ -14,7 +14,7 @@
 
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // Projection of (rn, rt1, rt2) onto the Coulomb cone of coefficient mu (in place).
 void projectOntoCone(double mu, double* r);
@@ -34,4 +34,4 @@ std::vector<ContactState> classifyContacts(const Problem& problem,
                                            const Eigen::VectorXd& lambda,
                                            const std::vector<bool>& ignored = {});
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

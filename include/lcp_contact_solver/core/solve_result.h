@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 enum class ContactState : std::uint8_t {
   kOpen = 0,     // no force: separating or just touching
@@ -67,4 +67,4 @@ struct SolveResult {
   std::vector<double> residual_history;  // per sweep/pivot, only with displayDebug
 };
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 enum class ParamType { kDouble, kInt, kBool, kEnum };
 
@@ -56,4 +56,4 @@ std::string paramText(const SolverParams& params, const std::string& name);
 // Shortest %.{1..17}g text that reads back as the same double.
 std::string exactDoubleText(double value);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

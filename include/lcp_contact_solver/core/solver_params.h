@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 enum class SolverKind {
   kAuto,       // the portfolio (contact_solver.cpp, docs/ARCHITECTURE.md): starts with the
@@ -140,4 +140,4 @@ bool parseConstraintLevel(const std::string& name, ConstraintLevel* level);
 // Empty string if the parameters are valid, otherwise a sentence naming the bad field.
 std::string validateParams(const SolverParams& params);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // The contact's β and s: its own, or the parameters' for kUseDefault. Bilateral: 0.
 double effectiveErp(const Contact& contact, const SolverParams& params);
@@ -54,4 +54,4 @@ struct StabilizationUndo {
 bool applyStabilizationInPlace(const SolverParams& params, Problem* problem, StabilizationUndo* undo,
                                std::string* error);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -75,12 +75,12 @@ class ContactSolverNode {
 
   // Cycle steps; the caller holds solve_mutex_.
   void applyAcceptedSettings();
-  void recordSolve(const lcs::SolveResult& result);
+  void recordSolve(const lcs::core::SolveResult& result);
   void reject(const std_msgs::Header& header, std::uint8_t status_code, const std::string& message);
   bool publishForces(const std_msgs::Header& header, CycleOutput* cycle);
   bool publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                      const lcs::Problem& problem, const lcs::SolveResult& result);
-  void logCycle(const lcs::Problem& problem, const lcs::SolveResult& result);
+                      const lcs::core::Problem& problem, const lcs::core::SolveResult& result);
+  void logCycle(const lcs::core::Problem& problem, const lcs::core::SolveResult& result);
   void reportUnsolved(const UnsolvedInput& input);
 
   NodeSettings latestSettings();

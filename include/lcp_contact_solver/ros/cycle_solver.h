@@ -24,9 +24,9 @@ struct CycleOutput {
   // Non-empty: the input was rejected (malformed messages, or refused by the core's own
   // checks) and nothing was solved; `stats` is then the rejection (status invalid_input).
   std::string error;
-  lcs::Problem problem;               // the converted problem (empty when rejected early)
+  lcs::core::Problem problem;               // the converted problem (empty when rejected early)
   std::vector<ContactFrame> frames;   // one per contact, from toProblem
-  lcs::SolveResult result;            // the core's result (when solved)
+  lcs::core::SolveResult result;            // the core's result (when solved)
   lcp_contact_solver::SolverStats stats;  // as the node publishes it on ~stats
   // The solve gave forces worth publishing (solveGaveForces) ...
   bool gave_forces = false;
@@ -39,12 +39,12 @@ struct CycleOutput {
 
 class CycleSolver {
  public:
-  explicit CycleSolver(const lcs::SolverParams& params);
+  explicit CycleSolver(const lcs::core::SolverParams& params);
 
   // Empty string on success; otherwise why the parameters were refused (the previous ones
   // stay in force). The warm start memory is kept.
-  std::string setParams(const lcs::SolverParams& params);
-  const lcs::SolverParams& params() const { return solver_.params(); }
+  std::string setParams(const lcs::core::SolverParams& params);
+  const lcs::core::SolverParams& params() const { return solver_.params(); }
 
   // Solves one pair (stamps are not compared here). With `build_forces` false the
   // ConstraintForces message is not built (the node's computeConstraintForces=false with
@@ -54,10 +54,10 @@ class CycleSolver {
                     const lcp_contact_solver::Compliance& compliance, bool build_forces = true);
 
   void resetWarmStart() { solver_.resetWarmStart(); }
-  lcs::ContactSolver& core() { return solver_; }
+  lcs::core::ContactSolver& core() { return solver_; }
 
  private:
-  lcs::ContactSolver solver_;
+  lcs::core::ContactSolver solver_;
 };
 
 }  // namespace lcp_contact_solver_ros

@@ -31,13 +31,13 @@ inline bool shouldBuildMarkers(std::uint32_t subscribers) { return subscribers >
 // `mu` is each contact's effective friction coefficient (core effectiveMu).
 visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header,
                                              const std::vector<ContactFrame>& frames,
-                                             const lcs::Problem& problem,
-                                             const lcs::SolveResult& result,
+                                             const lcs::core::Problem& problem,
+                                             const lcs::core::SolveResult& result,
                                              const std::vector<double>& mu,
                                              const DisplayOptions& options);
 
 // Open grey, stick green, slip orange, ignored blue.
-std_msgs::ColorRGBA stateColor(lcs::ContactState state);
+std_msgs::ColorRGBA stateColor(lcs::core::ContactState state);
 
 // Diverging heat colour: blue for -scale, white for 0, red for +scale.
 std_msgs::ColorRGBA heatColor(double value, double scale);

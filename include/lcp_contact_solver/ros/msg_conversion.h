@@ -28,13 +28,13 @@ namespace lcs = ::lcp_contact_solver;
 // The core's contact frame (core/contact_frame.h), in the contact array's header frame.
 // Named here too because the node, the markers and this layer's users spell it
 // lcp_contact_solver_ros::ContactFrame; it is the same type, not a second one.
-using lcs::ContactFrame;
+using lcs::core::ContactFrame;
 
 // The one mapping between the core's contact types and ContactPoint's type constants (the
 // numbers agree by design; msg_conversion.cpp asserts it at compile time).
-std::uint8_t toMsgType(lcs::ContactType type);
+std::uint8_t toMsgType(lcs::core::ContactType type);
 // Only for a type code that contactRows-style validation accepted (0..4).
-lcs::ContactType fromMsgType(std::uint8_t type);
+lcs::core::ContactType fromMsgType(std::uint8_t type);
 
 // Deterministic tangents of a unit normal: the core's rule (core/contact_frame.h), shared
 // with the scene layer so both derive the same friction rows.
@@ -50,7 +50,7 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 // leaves out lcs::validateProblem (non-finite values in W and d_free): for a caller whose
 // next step is ContactSolver::solve, which runs the same check (CycleSolver).
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::Problem* problem, std::vector<ContactFrame>* frames,
+                      int max_rows, lcs::core::Problem* problem, std::vector<ContactFrame>* frames,
                       bool validate = true);
 
 // Body names of one contact, for toContactArrayMsg.
@@ -63,28 +63,28 @@ struct ContactBodies {
 // d_free from `problem`; position, normal and tangents from `frames` (tangents zero where
 // derived_tangents: the reader derives the same); body names from `bodies`. `frames` and
 // `bodies` have one entry per contact.
-lcs::ContactArray toContactArrayMsg(const lcs::Problem& problem, const std::vector<ContactFrame>& frames,
+lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem, const std::vector<ContactFrame>& frames,
                                     const std::vector<ContactBodies>& bodies, const std_msgs::Header& header);
 
 // The compliance message of a core matrix (dense, or block-sparse with the core's blocks).
-lcs::Compliance toComplianceMsg(const lcs::ComplianceMatrix& W);
+lcs::Compliance toComplianceMsg(const lcs::core::ComplianceMatrix& W);
 // The compliance message of a problem: its body form (STORAGE_BODIES) when it has one,
 // otherwise its W as above. `header` is left to the caller.
-lcs::Compliance toComplianceMsg(const lcs::Problem& problem);
+lcs::Compliance toComplianceMsg(const lcs::core::Problem& problem);
 
 // Forces of a solved problem: per contact and summed per body pair. `frames` and
 // `problem` come from toProblem on `contacts`.
 lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
                                             const std::vector<ContactFrame>& frames,
-                                            const lcs::Problem& problem,
-                                            const lcs::SolveResult& result);
+                                            const lcs::core::Problem& problem,
+                                            const lcs::core::SolveResult& result);
 
 // The summed wrench on body_a per (body_a, body_b) pair, torques about the frame origin.
 std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::ContactForce>& forces);
 
 // Stats of a solve that ran.
-lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::Problem& problem,
-                            const lcs::SolveResult& result);
+lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::core::Problem& problem,
+                            const lcs::core::SolveResult& result);
 
 // Stats of an input that was not solved (malformed, unpaired, refused by the core).
 lcs::SolverStats rejectedStatsMsg(const std_msgs::Header& header, std::uint8_t status_code,
@@ -95,7 +95,7 @@ std::string statusCodeName(std::uint8_t status_code);
 
 // True when the solve gave forces worth applying: converged, or the best iterate at the
 // iteration cap (SOFA's behaviour) or time budget. Other statuses publish no forces.
-bool solveGaveForces(const lcs::SolveResult& result);
+bool solveGaveForces(const lcs::core::SolveResult& result);
 
 // Last guard before publishing: every number in the message is finite.
 bool allFinite(const lcs::ConstraintForces& forces);

@@ -41,7 +41,7 @@ lcs::Compliance toComplianceMsg(const lcs::scene::StepProblem& step, const std_m
 // id (not by position in the message). Returns an empty string, or one sentence naming the
 // first fault (unknown or repeated id, missing contact, wrong number of rows, non-finite
 // value); on a fault `lambda` is left zero.
-std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::Problem& problem,
+std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::core::Problem& problem,
                          Eigen::VectorXd* lambda);
 
 // The pose of a body's link frame in the world frame: header.frame_id → body.name.

@@ -30,10 +30,10 @@ struct DisplayOptions {
 };
 
 // SOFA's defaults, with the node's row limit.
-lcs::SolverParams defaultSolverParams();
+lcs::core::SolverParams defaultSolverParams();
 
 struct NodeSettings {
-  lcs::SolverParams solver = defaultSolverParams();
+  lcs::core::SolverParams solver = defaultSolverParams();
   DisplayOptions display;
   double pairing_window = 0.5;  // s
   int queue_size = 10;
@@ -51,7 +51,7 @@ std::string loadSettings(const ros::NodeHandle& pnh, NodeSettings* settings);
 std::string validateSettings(const NodeSettings& settings);
 
 // Applies one "name=value" override of a solver parameter (service requests).
-std::string applyOverride(const std::string& assignment, lcs::SolverParams* params);
+std::string applyOverride(const std::string& assignment, lcs::core::SolverParams* params);
 
 // The names applyOverride accepts.
 std::vector<std::string> overridableNames();

@@ -57,11 +57,11 @@ class RigidContactModel {
   // dt² J M⁻¹ Jᵀ; block-sparse holds one block per pair of contacts sharing a dynamic body
   // (both (i, j) and (j, i)), columns ascending.
   // kBodies gives the block-sparse W (the body form is bodyCompliance).
-  ComplianceMatrix compliance(double dt, ComplianceStorage storage) const;
+  core::ComplianceMatrix compliance(double dt, ComplianceStorage storage) const;
   // The body form of the same W (core/body_compliance.h): C_b = dt² M_b⁻¹ for every scene
   // body (zero for static ones, which no contact names: their side is -1) and each
   // contact's J_A, J_B. O(bodies + rows).
-  BodyCompliance bodyCompliance(double dt) const;
+  core::BodyCompliance bodyCompliance(double dt) const;
   // gapTerm + dt J v_free.
   Eigen::VectorXd freeViolation(const std::vector<Vector6d>& v_free, double dt) const;
   // Relative normal velocity J_n v of each contact (m/s; < 0 approaching).
@@ -98,11 +98,11 @@ class RigidContactModel {
 };
 
 // The core contacts of the frames: id, type, rows, μ, gap, and the scene's erp and softness.
-std::vector<Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames);
+std::vector<core::Contact> problemContacts(const Scene& scene, const std::vector<SceneContact>& frames);
 
 // Problem (contacts, W, d_free) of the given frames; frames.size() == contacts. With
 // kBodies the problem carries the body form (Problem::bodies) and no W.
-Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
+core::Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
                      const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
 
 }  // namespace scene

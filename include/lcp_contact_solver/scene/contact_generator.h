@@ -52,7 +52,7 @@ namespace scene {
 // ROS layer can fill its messages without recomputing: the core's ContactFrame (world frame:
 // `position` in m, `normal` from B into A, the rule's tangents, given explicitly so
 // derived_tangents stays false) plus what the scene knows.
-struct SceneContact : ContactFrame {
+struct SceneContact : core::ContactFrame {
   std::int64_t id = 0;
   int body_a = -1, body_b = -1;  // indices into Scene::bodies
   std::string body_a_name, body_b_name;
@@ -61,7 +61,7 @@ struct SceneContact : ContactFrame {
   double mu_torsional = 0.0;  // m
   double mu_rolling = 0.0;    // m
   double restitution = 0.0;
-  ContactType type = ContactType::kFrictional;
+  core::ContactType type = core::ContactType::kFrictional;
   int rows = 3;
   Eigen::Vector3d point_local_a = Eigen::Vector3d::Zero();  // point in A's link frame
 

@@ -196,7 +196,7 @@ struct MujocoExtractOptions {
 };
 
 struct MujocoProblem {
-  Problem problem;                  // contacts (id, type, rows, μ), W, d_free in problem order
+  core::Problem problem;                  // contacts (id, type, rows, μ), W, d_free in problem order
   std::vector<MujocoEntry> entries; // one per problem contact
   std::vector<int> efc_row;         // MuJoCo row of each problem row
   Eigen::VectorXd row_scale;        // s of each problem row (λ = s f)
@@ -243,11 +243,11 @@ struct ForceComparison {
   double max_rel = 0.0;
   double scale = 0.0;  // max |f_mujoco| (1 when all are zero)
   // Indexed by ContactState: entries and the max abs difference among their rows.
-  int state_count[kContactStateCount] = {};
-  double state_max_abs[kContactStateCount] = {};
+  int state_count[core::kContactStateCount] = {};
+  double state_max_abs[core::kContactStateCount] = {};
 };
 ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorXd& lambda,
-                              const std::vector<ContactState>& states = {});
+                              const std::vector<core::ContactState>& states = {});
 
 // The package's solver-independent residual (residual.h) of problem forces λ, e.g.
 // MuJoCo's own (mujoco_lambda), so every solver is measured the same way.

@@ -129,11 +129,11 @@ struct SceneParams {
   // the core's parameters (solver_param_table.def), with `name` for `solver`; e.g.
   // `build_lcp: false` with `compliance: bodies`: the unbuilt solve. The ROS simulator node leaves solving to the
   // solver node and ignores them.
-  SolverParams solver = defaultSceneSolverParams();
+  core::SolverParams solver = defaultSceneSolverParams();
   // Suggested simulated time for demos (s); 0 = not given.
   double duration = 0.0;
 
-  static SolverParams defaultSceneSolverParams();
+  static core::SolverParams defaultSceneSolverParams();
   // Friction coefficient of the pair (overrides first, then `mu`).
   double frictionFor(const std::string& a, const std::string& b) const;
   PairContactModel contactModelFor(const std::string& a, const std::string& b) const;

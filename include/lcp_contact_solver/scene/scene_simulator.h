@@ -29,7 +29,7 @@ namespace scene {
 
 // What one step asks the solver.
 struct StepProblem {
-  Problem problem;                  // contacts (id, type, rows, μ), W, d_free; rows in frame order
+  core::Problem problem;                  // contacts (id, type, rows, μ), W, d_free; rows in frame order
   std::vector<SceneContact> frames; // one per problem contact, same order
   double dt = 0.0;                  // s
   double time = 0.0;                // simulated time at the start of the step (s)
@@ -45,7 +45,7 @@ struct StepStats {
   int impacts = 0;  // contacts that bounced this step (restitution)
   ContactGenerationStats generation;
   bool solved = false;         // the in-process solver ran (false without contacts or with applyForces)
-  SolveStatus status = SolveStatus::kConverged;
+  core::SolveStatus status = core::SolveStatus::kConverged;
   bool converged = true;
   int iterations = 0;
   double residual = 0.0;
@@ -97,20 +97,20 @@ class SceneSimulator {
   double energy() const { return kineticEnergy() + potentialEnergy(); }
 
   const StepProblem& lastProblem() const { return problem_; }    // the last built step
-  const SolveResult& lastSolve() const { return last_solve_; }   // the in-process solve of step()
+  const core::SolveResult& lastSolve() const { return last_solve_; }   // the in-process solve of step()
   const Eigen::VectorXd& lastForces() const { return last_forces_; }  // λ applied last
   const StepStats& lastStats() const { return last_stats_; }
   // Contact wrench [force; torque about the COM] on each body from the last applied forces.
   std::vector<Vector6d> lastContactWrenches() const;
 
   ContactGenerator& contactGenerator() { return *generator_; }
-  ContactSolver& solver() { return solver_; }
+  core::ContactSolver& solver() { return solver_; }
 
  private:
   void applyRestitution(double dt);
   Scene scene_;
   std::unique_ptr<ContactGenerator> generator_;
-  ContactSolver solver_;
+  core::ContactSolver solver_;
   StepProblem problem_;
   std::unique_ptr<RigidContactModel> model_;
   std::vector<Vector6d> v_free_;
@@ -118,7 +118,7 @@ class SceneSimulator {
   double time_ = 0.0;
   long long step_index_ = 0;
   Eigen::VectorXd last_forces_;
-  SolveResult last_solve_;
+  core::SolveResult last_solve_;
   StepStats last_stats_;
   StepStats building_;  // stats of the pending step
 };

@@ -18,7 +18,7 @@ constexpr double kConeSlack = 1e-9;
 
 }  // namespace
 
-AnswerCheck checkAnswer(const lcs::Problem& input, const lcs::SolverParams& params,
+AnswerCheck checkAnswer(const lcs::core::Problem& input, const lcs::core::SolverParams& params,
                         const lcp_contact_solver::ConstraintForces& forces) {
   AnswerCheck check;
   auto violation = [&check](std::size_t* counter, const std::string& what) {
@@ -31,16 +31,16 @@ AnswerCheck checkAnswer(const lcs::Problem& input, const lcs::SolverParams& para
     return check;
   }
   // The problem the kernel solved: Baumgarte and softness as ContactSolver applies them.
-  lcs::Problem stabilized;
-  const bool stabilize = lcs::needsStabilization(input, params);
+  lcs::core::Problem stabilized;
+  const bool stabilize = lcs::core::needsStabilization(input, params);
   if (stabilize) {
     stabilized = input;
-    if (const std::string error = lcs::applyStabilization(params, &stabilized); !error.empty()) {
+    if (const std::string error = lcs::core::applyStabilization(params, &stabilized); !error.empty()) {
       check.unfit = "stabilization: " + error;
       return check;
     }
   }
-  const lcs::Problem& problem = stabilize ? stabilized : input;
+  const lcs::core::Problem& problem = stabilize ? stabilized : input;
   const std::vector<int> offsets = problem.rowOffsets();
   Eigen::VectorXd lambda(offsets.back());
   std::vector<bool> ignored(n, false);
@@ -60,19 +60,19 @@ AnswerCheck checkAnswer(const lcs::Problem& input, const lcs::SolverParams& para
       }
       lambda[offsets[i] + r] = f.lambda[r];
     }
-    ignored[i] = f.state == static_cast<std::uint8_t>(lcs::ContactState::kIgnored);
+    ignored[i] = f.state == static_cast<std::uint8_t>(lcs::core::ContactState::kIgnored);
   }
   Eigen::VectorXd d;
-  lcs::multiplyCompliance(problem, lambda, d);
+  lcs::core::multiplyCompliance(problem, lambda, d);
   d += problem.d_free;
   if (params.regularizationTerm != 0.0) d += params.regularizationTerm * lambda;
-  const std::vector<double> mu = lcs::effectiveMu(problem, params.mu);
-  check.residual = lcs::naturalMapResidual(problem, mu, lambda, d, ignored);
+  const std::vector<double> mu = lcs::core::effectiveMu(problem, params.mu);
+  check.residual = lcs::core::naturalMapResidual(problem, mu, lambda, d, ignored);
 
-  const std::vector<lcs::ContactState> states = lcs::classifyContacts(problem, mu, lambda, ignored);
-  const bool disc = params.friction_model == lcs::FrictionModel::kCoulombDisc;
+  const std::vector<lcs::core::ContactState> states = lcs::core::classifyContacts(problem, mu, lambda, ignored);
+  const bool disc = params.friction_model == lcs::core::FrictionModel::kCoulombDisc;
   for (std::size_t i = 0; i < n; ++i) {
-    const lcs::Contact& c = problem.contacts[i];
+    const lcs::core::Contact& c = problem.contacts[i];
     const double* l = lambda.data() + offsets[i];
     const int rows = offsets[i + 1] - offsets[i];
     const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
@@ -87,9 +87,9 @@ AnswerCheck checkAnswer(const lcs::Problem& input, const lcs::SolverParams& para
         }
       continue;
     }
-    if (c.type == lcs::ContactType::kBilateral) continue;
+    if (c.type == lcs::core::ContactType::kBilateral) continue;
     if (l[0] < 0.0) violation(&check.negative_normals, name + ": normal force " + exactNumber(l[0]) + " < 0");
-    if (!lcs::hasSlidingFriction(c.type) || rows < 3) continue;
+    if (!lcs::core::hasSlidingFriction(c.type) || rows < 3) continue;
     const double bound = mu[i] * l[0] * (1.0 + kConeSlack) + 1e-300;
     const double tangential = disc ? std::hypot(l[1], l[2]) : std::max(std::abs(l[1]), std::abs(l[2]));
     if (tangential > bound)
@@ -104,7 +104,7 @@ bool residualsAgree(double recomputed, double reported) {
 }
 
 bool AnswerChecks::add(const AnswerCheck& check, const lcp_contact_solver::SolverStats* stats,
-                       const lcs::SolverParams& params, const ros::Time& stamp) {
+                       const lcs::core::SolverParams& params, const ros::Time& stamp) {
   ++checked;
   std::string failure;
   if (!check.unfit.empty()) {
@@ -127,8 +127,8 @@ bool AnswerChecks::add(const AnswerCheck& check, const lcp_contact_solver::Solve
                     " recorded";
       }
       // The pyramid models converge on their own law; their disc residual is not bounded.
-      if (stats->converged && params.stopping_rule == lcs::StoppingRule::kResidual &&
-          params.friction_model == lcs::FrictionModel::kCoulombDisc && !(check.residual <= params.tolerance)) {
+      if (stats->converged && params.stopping_rule == lcs::core::StoppingRule::kResidual &&
+          params.friction_model == lcs::core::FrictionModel::kCoulombDisc && !(check.residual <= params.tolerance)) {
         ++above_tolerance;
         if (failure.empty())
           failure = "recorded as converged, residual " + exactNumber(check.residual) + " > tolerance " +

@@ -137,7 +137,7 @@ struct Reference {
 
 class Replayer {
  public:
-  Replayer(const ReplayOptions& options, const lcs::SolverParams& params, ReplayResult* result)
+  Replayer(const ReplayOptions& options, const lcs::core::SolverParams& params, ReplayResult* result)
       : options_(options), cycle_(params), r_(*result) {}
 
   void run() {
@@ -398,14 +398,14 @@ class Replayer {
 
 }  // namespace
 
-ReplayResult replayBag(const ReplayOptions& options, const lcs::SolverParams& params) {
+ReplayResult replayBag(const ReplayOptions& options, const lcs::core::SolverParams& params) {
   ReplayResult result;
-  if (const std::string error = lcs::validateParams(params); !error.empty()) {
+  if (const std::string error = lcs::core::validateParams(params); !error.empty()) {
     result.error = "invalid parameters: " + error;
     return result;
   }
   if (options.recorded_params) {
-    if (const std::string error = lcs::validateParams(*options.recorded_params); !error.empty()) {
+    if (const std::string error = lcs::core::validateParams(*options.recorded_params); !error.empty()) {
       result.error = "invalid recorded parameters: " + error;
       return result;
     }

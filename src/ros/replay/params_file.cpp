@@ -35,12 +35,12 @@ const std::set<std::string>& nodeOnlyParams() {
 
 }  // namespace
 
-std::string applyReplayOverride(const std::string& assignment, lcs::SolverParams* params) {
-  const std::string error = lcs::applyAssignment(params, assignment);
+std::string applyReplayOverride(const std::string& assignment, lcs::core::SolverParams* params) {
+  const std::string error = lcs::core::applyAssignment(params, assignment);
   return error.empty() ? "" : "override " + error;
 }
 
-std::string loadParamsFile(const std::string& path, lcs::SolverParams* params) {
+std::string loadParamsFile(const std::string& path, lcs::core::SolverParams* params) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -51,26 +51,26 @@ std::string loadParamsFile(const std::string& path, lcs::SolverParams* params) {
   }
   if (root.IsNull()) return "";
   if (!root.IsMap()) return path + ": expected a map of parameter names to values";
-  lcs::SolverParams next = *params;
+  lcs::core::SolverParams next = *params;
   for (const auto& entry : root) {
     const std::string name = entry.first.Scalar();
     if (nodeOnlyParams().count(name) > 0) continue;
-    if (lcs::findSolverParam(name) == nullptr) return path + ": unknown parameter '" + name + "'";
+    if (lcs::core::findSolverParam(name) == nullptr) return path + ": unknown parameter '" + name + "'";
     if (!entry.second.IsScalar()) return path + ": parameter " + name + " must be a single value";
-    if (const std::string error = lcs::setParam(&next, name, entry.second.Scalar()); !error.empty())
+    if (const std::string error = lcs::core::setParam(&next, name, entry.second.Scalar()); !error.empty())
       return path + ": " + error;
   }
-  if (const std::string error = lcs::validateParams(next); !error.empty()) return path + ": " + error;
+  if (const std::string error = lcs::core::validateParams(next); !error.empty()) return path + ": " + error;
   *params = next;
   return "";
 }
 
-std::string writeParamsFile(const std::string& path, const lcs::SolverParams& p) {
+std::string writeParamsFile(const std::string& path, const lcs::core::SolverParams& p) {
   std::ofstream out(path);
   if (!out) return path + ": cannot write (" + std::strerror(errno) + ")";
   out << "# Solver parameters of contact_solver_node (private ~names), as used for the forces of the\n"
          "# bag beside this file. `replay BAG` reads them; see the README, \"Replaying recorded traffic\".\n";
-  for (const lcs::ParamSpec& spec : lcs::solverParamSpecs()) out << spec.name << ": " << lcs::paramText(p, spec.name) << "\n";
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) out << spec.name << ": " << lcs::core::paramText(p, spec.name) << "\n";
   out.close();
   if (!out) return path + ": write failed";
   return "";

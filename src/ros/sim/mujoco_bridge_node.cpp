@@ -79,7 +79,7 @@ void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key,
   addValue(status, key, out.str());
 }
 
-const char* const kStateNames[lcs::kContactStateCount] = {"open", "stick", "slip", "ignored", "closed"};
+const char* const kStateNames[lcs::core::kContactStateCount] = {"open", "stick", "slip", "ignored", "closed"};
 
 }  // namespace
 
@@ -123,7 +123,7 @@ lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& p
       frames[i].tangent1 = e.tangent1;
       frames[i].tangent2 = e.tangent2;
     } else {
-      frames[i] = lcs::frameFromNormal(e.position, e.normal);
+      frames[i] = lcs::core::frameFromNormal(e.position, e.normal);
     }
     bodies[i] = {world.bodyName(e.body_a), world.bodyName(e.body_b)};
   }
@@ -144,17 +144,17 @@ lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& probl
 std::string toReferenceForcesMsg(const scene::MujocoProblem& problem, const lcp_contact_solver::ContactArray& contacts,
                                  const lcp_contact_solver::Compliance& compliance,
                                  lcp_contact_solver::ConstraintForces* forces) {
-  lcs::Problem read;
+  lcs::core::Problem read;
   std::vector<ContactFrame> frames;
   if (std::string error = toProblem(contacts, compliance, 0, &read, &frames); !error.empty()) return error;
   if (read.rowCount() != problem.mujoco_lambda.size())
     return std::to_string(problem.mujoco_lambda.size()) + " MuJoCo forces for " + std::to_string(read.rowCount()) +
            " rows";
-  lcs::SolveResult mujoco;
+  lcs::core::SolveResult mujoco;
   mujoco.forces = problem.mujoco_lambda;
   // Every contact of the bridge carries its own mu (pyramid edges and limits none): the
   // default is never used.
-  mujoco.states = lcs::classifyContacts(read, lcs::effectiveMu(read, lcs::SolverParams().mu), mujoco.forces);
+  mujoco.states = lcs::core::classifyContacts(read, lcs::core::effectiveMu(read, lcs::core::SolverParams().mu), mujoco.forces);
   *forces = toConstraintForcesMsg(contacts, frames, read, mujoco);
   return "";
 }
@@ -396,9 +396,9 @@ bool MujocoBridgeNode::useForces(const scene::MujocoProblem& mp, const Eigen::Ve
 
 void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
                                diagnostic_msgs::DiagnosticStatus* report) {
-  std::vector<lcs::ContactState> states;
+  std::vector<lcs::core::ContactState> states;
   for (const auto& f : link_.forces().forces)
-    states.push_back(static_cast<lcs::ContactState>(std::min<int>(f.state, lcs::kContactStateCount - 1)));
+    states.push_back(static_cast<lcs::core::ContactState>(std::min<int>(f.state, lcs::core::kContactStateCount - 1)));
   const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
   ++counters_.compared;
   totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
@@ -407,7 +407,7 @@ void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::Vect
   addValue(report, "max_abs_diff", cmp.max_abs);
   addValue(report, "max_rel_diff", cmp.max_rel);
   addValue(report, "force_scale", cmp.scale);
-  for (int k = 0; k < lcs::kContactStateCount; ++k) {
+  for (int k = 0; k < lcs::core::kContactStateCount; ++k) {
     totals_.state_count[k] += cmp.state_count[k];
     if (cmp.state_count[k] == 0) continue;
     totals_.state_max_rel[k] = std::max(totals_.state_max_rel[k], cmp.state_max_abs[k] / cmp.scale);

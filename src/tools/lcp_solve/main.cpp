@@ -30,7 +30,7 @@ constexpr int kExitUsage = 2;    // bad command line
 
 struct LcpSolveOptions {
   std::vector<std::string> files;
-  SolverParams params;
+  core::SolverParams params;
   bool json = false;              // one JSON object per line instead of the table
   bool fail_unconverged = false;  // exit 1 when some problem did not converge
   bool help = false;
@@ -57,7 +57,7 @@ std::string kebab(const std::string& name) {
 }
 
 // The option's spellings, table name first: "--maxIt,--max-it".
-std::vector<std::string> spellings(const ParamSpec& spec) {
+std::vector<std::string> spellings(const core::ParamSpec& spec) {
   std::vector<std::string> names = {"--" + spec.name};
   if (kebab(spec.name) != spec.name) names.push_back("--" + kebab(spec.name));
   if (spec.name == "regularizationTerm") names.push_back("--regularization");
@@ -78,12 +78,12 @@ std::string parseArgs(const std::vector<std::string>& args, LcpSolveOptions* opt
   app.set_help_flag();  // --help prints lcpSolveUsage(), not CLI11's text
   app.allow_extras();   // reported below as "unknown option"
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  const std::vector<ParamSpec>& specs = solverParamSpecs();
+  const std::vector<core::ParamSpec>& specs = core::solverParamSpecs();
   std::vector<std::string> values(specs.size());
   std::vector<CLI::Option*> given(specs.size()), negated(specs.size(), nullptr);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const std::string names = joined(spellings(specs[i]), ",");
-    if (specs[i].type == ParamType::kBool) {
+    if (specs[i].type == core::ParamType::kBool) {
       given[i] = app.add_flag(names);
       negated[i] = app.add_flag("--no-" + kebab(specs[i].name));
     } else {
@@ -106,14 +106,14 @@ std::string parseArgs(const std::vector<std::string>& args, LcpSolveOptions* opt
     if (extra != "--") return "unknown option '" + extra.substr(0, extra.find('=')) + "'";
   for (std::size_t i = 0; i < specs.size(); ++i) {
     std::string text;
-    if (given[i]->count() > 0) text = specs[i].type == ParamType::kBool ? "true" : values[i];
+    if (given[i]->count() > 0) text = specs[i].type == core::ParamType::kBool ? "true" : values[i];
     if (negated[i] != nullptr && negated[i]->count() > 0) text = "false";
     if (given[i]->count() == 0 && (negated[i] == nullptr || negated[i]->count() == 0)) continue;
-    if (const std::string why = setParam(&options->params, specs[i].name, text); !why.empty())
+    if (const std::string why = core::setParam(&options->params, specs[i].name, text); !why.empty())
       return "option " + spellings(specs[i]).back() + ": " + why;
   }
   if (options->help) return "";
-  if (const std::string why = validateParams(options->params); !why.empty()) return why;
+  if (const std::string why = core::validateParams(options->params); !why.empty()) return why;
   if (options->files.empty()) return "no problem file given";
   return "";
 }
@@ -126,12 +126,12 @@ std::string lcpSolveUsage() {
         << "solver parameters (the node's names, README \"Parameters\"; problem files give their\n"
         << "own mu per contact, mu is for those that give none; --display-debug prints each\n"
         << "problem's residual history on stderr):\n";
-  for (const ParamSpec& spec : solverParamSpecs()) {
+  for (const core::ParamSpec& spec : core::solverParamSpecs()) {
     std::string names = joined(spellings(spec), ", ");
-    if (spec.type == ParamType::kBool) {
+    if (spec.type == core::ParamType::kBool) {
       names += ", --no-" + kebab(spec.name);
     } else {
-      names += spec.type == ParamType::kEnum ? " NAME" : spec.type == ParamType::kInt ? " N" : " X";
+      names += spec.type == core::ParamType::kEnum ? " NAME" : spec.type == core::ParamType::kInt ? " N" : " X";
     }
     usage << "  " << names << "\n      " << spec.doc << "; default " << spec.default_text << "\n";
   }
@@ -161,9 +161,9 @@ int nameWidth(const std::vector<std::string>& files) {
 // One file: read, solve, print. Returns false if it could not be read or solved.
 bool solveFile(const std::string& file, const LcpSolveOptions& options, int name_width,
                bool* header_written, bool* converged, std::ostream& out, std::ostream& err) {
-  Problem problem;
+  core::Problem problem;
   try {
-    problem = readProblemFile(file);
+    problem = core::readProblemFile(file);
   } catch (const std::exception& e) {
     // ProblemFileError already names the file; anything else (bad_alloc) does not.
     const std::string reason = e.what();
@@ -171,9 +171,9 @@ bool solveFile(const std::string& file, const LcpSolveOptions& options, int name
     err << kProgram << ": " << (reason.rfind(prefix, 0) == 0 ? reason : prefix + reason) << "\n";
     return false;
   }
-  SolveResult result;
+  core::SolveResult result;
   try {
-    ContactSolver solver(options.params);  // fresh per file: no warm start across files
+    core::ContactSolver solver(options.params);  // fresh per file: no warm start across files
     result = solver.solve(problem);
   } catch (const std::exception& e) {
     err << kProgram << ": " << file << ": solve failed: " << e.what() << "\n";
@@ -189,7 +189,7 @@ bool solveFile(const std::string& file, const LcpSolveOptions& options, int name
   out.flush();
   if (options.params.displayDebug) err << formatResidualHistory(problem, result);
   *converged = result.converged;
-  if (result.status == SolveStatus::kInvalidInput) {
+  if (result.status == core::SolveStatus::kInvalidInput) {
     err << kProgram << ": " << file << ": solver refused the problem: " << result.message << "\n";
     return false;
   }

@@ -53,11 +53,11 @@ std::string jsonArray(const Eigen::VectorXd& values) {
   return array + "]";
 }
 
-std::string jsonStates(const std::vector<ContactState>& states) {
+std::string jsonStates(const std::vector<core::ContactState>& states) {
   std::string array = "[";
   for (std::size_t i = 0; i < states.size(); ++i) {
     if (i > 0) array += ",";
-    array += jsonString(stateName(states[i]));
+    array += jsonString(core::stateName(states[i]));
   }
   return array + "]";
 }
@@ -98,16 +98,16 @@ std::string formatTableHeader(int name_width) {
                                 "converged", "status", "time_s"});
 }
 
-std::string formatTableRow(const Problem& problem, const SolveResult& result, int name_width) {
+std::string formatTableRow(const core::Problem& problem, const core::SolveResult& result, int name_width) {
   return tableLine(name_width,
                    {problem.name, std::to_string(problem.contacts.size()),
                     std::to_string(problem.rowCount()), result.solver,
                     std::to_string(result.iterations), formatNumber("%.3e", result.residual),
-                    result.converged ? "yes" : "no", statusName(result.status),
+                    result.converged ? "yes" : "no", core::statusName(result.status),
                     formatNumber("%.6f", result.solve_time)});
 }
 
-std::string formatJsonLine(const Problem& problem, const SolveResult& result) {
+std::string formatJsonLine(const core::Problem& problem, const core::SolveResult& result) {
   std::string json = "{";
   json += "\"name\":" + jsonString(problem.name);
   json += ",\"contacts\":" + std::to_string(problem.contacts.size());
@@ -116,8 +116,8 @@ std::string formatJsonLine(const Problem& problem, const SolveResult& result) {
   json += ",\"iterations\":" + std::to_string(result.iterations);
   json += ",\"residual\":" + jsonNumber(result.residual);
   json += std::string(",\"converged\":") + (result.converged ? "true" : "false");
-  json += ",\"status\":" + jsonString(statusName(result.status));
-  json += ",\"friction_model\":" + jsonString(frictionModelName(result.friction_model));
+  json += ",\"status\":" + jsonString(core::statusName(result.status));
+  json += ",\"friction_model\":" + jsonString(core::frictionModelName(result.friction_model));
   json += ",\"solver_error\":" + jsonNumber(result.solver_error);
   json += ",\"solve_time\":" + jsonNumber(result.solve_time);
   json += ",\"message\":" + jsonString(result.message);
@@ -127,7 +127,7 @@ std::string formatJsonLine(const Problem& problem, const SolveResult& result) {
   return json + "}";
 }
 
-std::string formatResidualHistory(const Problem& problem, const SolveResult& result) {
+std::string formatResidualHistory(const core::Problem& problem, const core::SolveResult& result) {
   std::string text = problem.name + ": residual history (" +
                      std::to_string(result.residual_history.size()) + " entries, solver " +
                      result.solver + ")\n";

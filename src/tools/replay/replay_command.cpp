@@ -124,7 +124,7 @@ std::string parseCommandLine(const std::vector<std::string>& args, ReplayCommand
 
 // The node's defaults, then the parameter file (--params, or the one beside the bag), then
 // the overrides. False after writing the error.
-bool assembleParams(ReplayCommandLine* cli, lcs::SolverParams* params, std::string* source, std::ostream& err) {
+bool assembleParams(ReplayCommandLine* cli, lcs::core::SolverParams* params, std::string* source, std::ostream& err) {
   *params = defaultSolverParams();
   *source = "the node's defaults";
   const std::string beside = paramsFileBeside(cli->options.bag);
@@ -144,7 +144,7 @@ bool assembleParams(ReplayCommandLine* cli, lcs::SolverParams* params, std::stri
     }
     *source += " + " + assignment;
   }
-  if (const std::string error = lcs::validateParams(*params); !error.empty()) {
+  if (const std::string error = lcs::core::validateParams(*params); !error.empty()) {
     err << "replay: invalid parameters: " << error << "\n";
     return false;
   }
@@ -207,7 +207,7 @@ int runReplayCommand(const std::vector<std::string>& args, std::ostream& out, st
     return 0;
   }
   ReplayOptions& options = cli.options;
-  lcs::SolverParams params;
+  lcs::core::SolverParams params;
   std::string params_source;
   if (!assembleParams(&cli, &params, &params_source, err)) return 2;
 
@@ -219,7 +219,7 @@ int runReplayCommand(const std::vector<std::string>& args, std::ostream& out, st
     };
   if (!cli.quiet) {
     out << "replay " << options.bag << "\n"
-        << "parameters: " << params_source << " (solver " << lcs::solverName(params.solver) << ", tolerance "
+        << "parameters: " << params_source << " (solver " << lcs::core::solverName(params.solver) << ", tolerance "
         << shortNumber(params.tolerance) << ", maxIt " << params.maxIt << ", mu " << shortNumber(params.mu)
         << ", initial_guess " << (params.initial_guess ? "true" : "false") << ")\n";
     out.flush();

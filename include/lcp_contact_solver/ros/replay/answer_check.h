@@ -43,7 +43,7 @@ struct AnswerCheck {
 
 // Checks `forces` (the node's answer) on `problem` (as toProblem built it from the messages)
 // solved with `params`.
-AnswerCheck checkAnswer(const lcs::Problem& problem, const lcs::SolverParams& params,
+AnswerCheck checkAnswer(const lcs::core::Problem& problem, const lcs::core::SolverParams& params,
                         const lcp_contact_solver::ConstraintForces& forces);
 
 // The recomputed residual against the reported one: equal up to rounding (the same formula
@@ -64,7 +64,7 @@ struct AnswerChecks {
   std::string first_failure;            // with its stamp
 
   // `stats` may be null. Returns false when this answer failed.
-  bool add(const AnswerCheck& check, const lcp_contact_solver::SolverStats* stats, const lcs::SolverParams& params,
+  bool add(const AnswerCheck& check, const lcp_contact_solver::SolverStats* stats, const lcs::core::SolverParams& params,
            const ros::Time& stamp);
   bool passed() const { return failed == 0; }
 };

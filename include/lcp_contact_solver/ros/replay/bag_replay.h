@@ -68,7 +68,7 @@ struct ReplayOptions {
   // The parameters the bag was recorded with (its params file, without overrides). When
   // set, every recorded answer (forces_topic, with its stats) is checked on its own problem
   // (answer_check.h) into ReplayResult::answers, independently of the replay's solve.
-  std::optional<lcs::SolverParams> recorded_params;
+  std::optional<lcs::core::SolverParams> recorded_params;
   bool copy_inputs = true;  // the output bag also holds the input topics (replayable)
   bool keep_cycles = false; // keep every cycle's output in ReplayResult::cycles
   // Called after each contact array read: (arrays read, arrays in the bag). Empty: none.
@@ -114,6 +114,6 @@ struct ReplayResult {
 };
 
 // Replays `options.bag` with `params`. Never throws; a fault is in ReplayResult::error.
-ReplayResult replayBag(const ReplayOptions& options, const lcs::SolverParams& params);
+ReplayResult replayBag(const ReplayOptions& options, const lcs::core::SolverParams& params);
 
 }  // namespace lcp_contact_solver_ros

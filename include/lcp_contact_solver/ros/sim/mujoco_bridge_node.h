@@ -113,8 +113,8 @@ struct MujocoBridgeTotals {
   int max_contacts = 0, last_contacts = 0, max_rows = 0;
   double max_residual = 0.0, last_residual = 0.0;
   double max_abs_diff = 0.0, max_rel_diff = 0.0;
-  double state_max_rel[lcs::kContactStateCount] = {};  // per contact state (open, stick, slip, ignored, closed)
-  std::int64_t state_count[lcs::kContactStateCount] = {};
+  double state_max_rel[lcs::core::kContactStateCount] = {};  // per contact state (open, stick, slip, ignored, closed)
+  std::int64_t state_count[lcs::core::kContactStateCount] = {};
   double max_penetration = 0.0, last_penetration = 0.0;
   double first_energy = 0.0, last_energy = 0.0;
   double our_solve_time = 0.0;     // s, summed (from the solver's stats)

@@ -38,7 +38,7 @@
 #include <string>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 constexpr int kMaxSteps = 30;
@@ -305,4 +305,4 @@ bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, K
   return false;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

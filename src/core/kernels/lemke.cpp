@@ -1,5 +1,5 @@
 // Lexicographic Lemke pivoting for the frictionless part of the contact problem.
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <Eigen/Core>
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // Relative size below which an entering-column entry does not count as positive.
@@ -475,4 +475,4 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

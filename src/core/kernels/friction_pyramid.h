@@ -18,7 +18,7 @@
 
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 struct FrictionPolygon {
   int facets = 0;            // m: 4 or 8
@@ -48,4 +48,4 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
                        const FrictionPolygon& polygon, const Eigen::VectorXd& lambda,
                        const Eigen::VectorXd& d, const std::vector<bool>& ignored);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/core/scalar_rows.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <string>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 std::size_t ScalarRows::bytes() const {
   return start.size() * sizeof(int) + index.size() * sizeof(int) + value.size() * sizeof(double);
@@ -204,4 +204,4 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

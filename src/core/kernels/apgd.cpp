@@ -31,7 +31,7 @@
 // parallel-friendly (matrix-vector products only, no sequential sweep), at 1e-4..1e-8;
 // insensitive to the contact ordering. On small, well
 // conditioned problems nlgs needs fewer products; for 1e-8 and below use newton.
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <algorithm>
@@ -40,7 +40,7 @@
 #include <string>
 #include <utility>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // The shift is refreshed when the convex problem's residual falls to this fraction of the
@@ -270,4 +270,4 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -42,7 +42,7 @@
 // When to use it: when high accuracy is wanted (1e-8..1e-12), on small and medium
 // problems (up to a few thousand rows), including ill-conditioned or rank-deficient W
 // where Gauss-Seidel stalls; each iteration is far more expensive than a sweep.
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "newton_symmetric.h"
 
@@ -57,7 +57,7 @@
 #include <string>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 // Warm start: nlgs sweeps until this residual (or the tolerance, if larger) or this
@@ -505,4 +505,4 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

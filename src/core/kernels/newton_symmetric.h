@@ -2,9 +2,9 @@
 // (frictionless, μ = 0 and bilateral rows only) whose W is symmetric.
 #pragma once
 
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // True when every active contact is frictionless or bilateral and W (assembled) is
 // symmetric to round-off: the problem the symmetric path solves.
@@ -15,4 +15,4 @@ bool symmetricLcp(const SolveContext& ctx);
 // its best iterate (never worse than the start) and report->iterations the steps spent.
 bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

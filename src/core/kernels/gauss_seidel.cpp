@@ -30,9 +30,9 @@
 #include "friction_pyramid.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/core/scalar_rows.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -43,7 +43,7 @@
 #include <limits>
 #include <variant>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 namespace {
 
@@ -737,4 +737,4 @@ KernelReport runBoxedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambd
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

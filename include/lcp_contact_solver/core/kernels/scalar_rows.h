@@ -11,7 +11,7 @@
 // row; the iterates are those of the block-sparse sweep (same order, same arithmetic).
 #pragma once
 
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/problem.h"
 
 #include <Eigen/Core>
@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // Compressed scalar rows (CSR) of a square matrix.
 struct ScalarRows {
@@ -47,4 +47,4 @@ ScalarRows scalarColumnsOf(const BlockSparseMatrix& W);
 // on the natural-map residual (residual.h), which on one-row contacts is also the pyramid's.
 KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

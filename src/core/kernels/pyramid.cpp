@@ -3,7 +3,7 @@
 // gauss_seidel.cpp (it shares the sweep of the other Gauss-Seidel solvers).
 #include "friction_pyramid.h"
 
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <algorithm>
@@ -11,7 +11,7 @@
 #include <limits>
 #include <string>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 FrictionPolygon makeFrictionPolygon(FrictionModel model) {
   FrictionPolygon polygon;
@@ -296,4 +296,4 @@ KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

@@ -28,7 +28,7 @@
 //
 // When to use it: high accuracy (1e-8..1e-12) on rank-deficient or ill-conditioned W where
 // newton stalls (auto runs it after a stalled newton); each outer step costs one newton solve.
-#include "lcp_contact_solver/core/kernels.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <algorithm>
@@ -36,7 +36,7 @@
 #include <limits>
 #include <string>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 namespace {
 
 constexpr double kSigmaStart = 1e-2;     // times the mean diagonal of W
@@ -157,4 +157,4 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   return report;
 }
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core

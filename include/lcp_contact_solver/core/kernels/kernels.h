@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-namespace lcp_contact_solver {
+namespace lcp_contact_solver::core {
 
 // Everything a kernel needs, computed once per solve.
 struct SolveContext {
@@ -89,4 +89,4 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runBoxedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
-}  // namespace lcp_contact_solver
+}  // namespace lcp_contact_solver::core
