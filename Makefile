@@ -124,8 +124,8 @@ soak: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target contact_solver_node soak_feeder
 	bench/soak.sh --build $(BUILD_DIR) $(SOAK_ARGS)
 
-# What erp and softness cost in iterations and buy in depth (README "Penetration correction
-# and softness"): in-process, no ROS graph.
+# What erp and softness cost in iterations and buy in depth (docs/SOLVERS.md "Penetration
+# correction and softness"; the figures in docs/BENCHMARKS.md): in-process, no ROS graph.
 stabilization: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target stabilization_tradeoff
 	@mkdir -p bench/results

@@ -1,4 +1,4 @@
-// What softness and erp cost and buy (README "Penetration correction and softness"):
+// What softness and erp cost and buy (docs/SOLVERS.md "Penetration correction and softness"):
 // steps a shipped scene in-process for every (erp, softness) pair and writes one CSV row
 // each: Gauss-Seidel sweeps per step to the tolerance, solve time, the resting penetration
 // and how much the bodies still move. Stiffer contacts (less softness) are harder to solve;

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Runs the README's runnable command blocks and checks what they print, so the README
-cannot drift from what works.
+"""Runs the runnable command blocks of the README and of the docs it continues into
+(docs/QUICKSTART.md, docs/TOOLS.md) and checks what they print, so they cannot drift from what
+works.
 
 A block is runnable when the line before its opening fence is a marker comment:
 
@@ -19,7 +20,12 @@ Every block runs with bash from the repository's root, against a private roscore
 port (the README's `roscore` is not needed), with ROS_HOME inside the build folder. The run
 stops at the first failure and prints the block, its output and what was wrong.
 
-    test/readme_runner.py README.md [--keep-going] [--list]
+Several files run as one session, in the order given and each file's blocks in order: one
+roscore, the environment of a `setup` block and the `background` processes carry over to the
+later files (docs/QUICKSTART.md continues the README's quick start: its blocks use the node
+the README starts). Without a file: README.md, docs/QUICKSTART.md, docs/TOOLS.md.
+
+    test/readme_runner.py [FILE...] [--keep-going] [--list]
 """
 import os
 import re
@@ -34,11 +40,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ros_processes import free_port, stop  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_FILES = ["README.md", "docs/QUICKSTART.md", "docs/TOOLS.md"]
 MARKER = re.compile(r"^<!--\s*readme-run:?(.*?)-->\s*$")
 
 
 class Block:
-    def __init__(self, line, text, options):
+    def __init__(self, path, line, text, options):
+        self.path = path
         self.line = line
         self.text = text
         self.options = options
@@ -70,7 +78,7 @@ def parse(readme):
             while j < len(lines) and not lines[j].startswith("```"):
                 body.append(lines[j])
                 j += 1
-            blocks.append(Block(i + 2, "\n".join(body) + "\n", options))
+            blocks.append(Block(readme, i + 2, "\n".join(body) + "\n", options))
             i = j
         elif m:
             raise SystemExit("readme_runner: %s:%d: marker not followed by a ``` block" % (readme, i + 1))
@@ -90,17 +98,21 @@ def advertised(env):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    readme = args[0] if args else os.path.join(ROOT, "README.md")
+    files = [a for a in sys.argv[1:] if not a.startswith("--")] or [os.path.join(ROOT, f) for f in DEFAULT_FILES]
     keep_going = "--keep-going" in sys.argv
-    blocks = parse(readme)
+    blocks = []
+    for readme in files:
+        found = parse(readme)
+        if not found:
+            print("readme_runner: no runnable block in %s" % readme)
+            return 1
+        blocks += found
     if "--list" in sys.argv:
         for b in blocks:
-            print("%s:%d %s\n%s" % (readme, b.line, " ".join(k + ("=" + v if v else "") for k, v in b.options), b.text))
+            print("%s:%d %s\n%s" % (b.path, b.line, " ".join(k + ("=" + v if v else "") for k, v in b.options), b.text))
+        print("readme_runner: %d blocks in %d files (%s)" % (len(blocks), len(files), ", ".join(
+            "%s: %d" % (f, sum(1 for b in blocks if b.path == f)) for f in files)))
         return 0
-    if not blocks:
-        print("readme_runner: no runnable block in %s" % readme)
-        return 1
 
     build = os.environ.get("BUILD_DIR", os.path.join(ROOT, "build"))
     ros_home = os.path.join(build, "ros_home", "readme_runner")
@@ -123,7 +135,7 @@ def main():
         while time.time() < deadline and "/rosout" not in advertised(env):
             time.sleep(0.5)
         for n, block in enumerate(blocks, 1):
-            where = "%s:%d" % (os.path.relpath(readme, ROOT), block.line)
+            where = "%s:%d" % (os.path.relpath(block.path, ROOT), block.line)
             timeout = float(block.get("timeout", "60"))
             started = time.time()
             if block.has("setup"):
@@ -177,7 +189,7 @@ def main():
                     return 1
             else:
                 print("ok   %s (%.1f s)" % (where, time.time() - started))
-        print("readme_runner: %d blocks, %d failed" % (len(blocks), failures))
+        print("readme_runner: %d blocks in %d files, %d failed" % (len(blocks), len(files), failures))
         passed = failures == 0
         return 0 if passed else 1
     finally:

@@ -638,7 +638,7 @@ SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::stead
   Problem assembled;
   if (stated.bodies && !unbuilt) assembled = assembledProblem(stated);
   const Problem& base = stated.bodies && !unbuilt ? assembled : stated;
-  // μ = 0 contacts cost one row (README "Contact models"): the kernels run without their
+  // μ = 0 contacts cost one row (docs/SOLVERS.md "Contact models"): the kernels run without their
   // tangent rows; forces, d, residual and states are reported on every row of `base`.
   const bool compact = !unbuilt && std::any_of(base.contacts.begin(), base.contacts.end(), [this](const Contact& c) {
     return zeroFriction(c, params_.mu);

@@ -11,6 +11,7 @@
 
 #include <boost/any.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -300,8 +301,8 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
   const std::size_t api = readme.find("## ROS API: `contact_solver_node`");
   ASSERT_NE(api, std::string::npos);
   const std::size_t section = readme.find("### Parameters", api);
-  const std::size_t end = readme.find("\n### ", section + 1);
   ASSERT_NE(section, std::string::npos);
+  const std::size_t end = std::min(readme.find("\n### ", section + 1), readme.find("\n## ", section + 1));
   std::map<std::string, std::vector<std::string>> rows;  // name → cells
   std::istringstream lines(readme.substr(section, end - section));
   for (std::string line; std::getline(lines, line);) {

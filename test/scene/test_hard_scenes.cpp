@@ -151,7 +151,7 @@ TEST(HardScenes, FiftyBoxStackRegularizedNlgs) {
 // rank-deficient stack within 200 sweeps (its rate degrades like 1 − c/n²), and says so:
 // every step is max_iterations, with finite forces and the true residual. Its unconverged
 // forces let the stack creep (measured: 4.5 cm and +2.4 J after 100 steps, 0.35 m and
-// +5.7 J after 300): this is the case newton or a regularizationTerm is for (README,
+// +5.7 J after 300): this is the case newton or a regularizationTerm is for (docs/SOLVERS.md,
 // "Numerical robustness"). Asserted: honest statuses, finite state, no blow-up (energy gain
 // < 5 J, drift < 0.2 m over these 100 steps).
 TEST(HardScenes, FiftyBoxStackPlainNlgsFailsHonestly) {

@@ -1,5 +1,5 @@
-// lcp_solve: solves contact problem files from the command line (README "Solving problem
-// files"). Arguments are parsed with CLI11; the table and JSON lines are problem_report.h's.
+// lcp_solve: solves contact problem files from the command line (docs/TOOLS.md "Solving
+// problem files"). Arguments are parsed with CLI11; the table and JSON lines are problem_report.h's.
 #include "problem_report.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"

@@ -1,6 +1,6 @@
 // rosrun lcp_contact_solver replay IN.bag [--out OUT.bag] [--csv STATS.csv] [name=value ...]
 // Offline replay of recorded contacts/compliance through the node's solve path; see
-// replay_command.h and the README ("Replaying recorded traffic").
+// replay_command.h and docs/TOOLS.md ("Replaying recorded traffic").
 #include "replay/replay_command.h"
 
 #include <iostream>
