@@ -1,4 +1,9 @@
+// ContactSolver: validation, SOFA's parameters and the stages of one solve around a kernel.
 #include "lcp_contact_solver/core/contact_solver.h"
+
+#include "kernel_dispatch.h"
+#include "portfolio.h"
+#include "zero_friction.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/islands.h"
@@ -9,496 +14,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <sstream>
 
 namespace lcp_contact_solver::core {
 
-// ---- SolveContext ---------------------------------------------------------------------------
-
-void SolveContext::computeD(const Eigen::VectorXd& lambda, Eigen::VectorXd& d) const {
-  multiplyCompliance(*problem, lambda, d);  // the body form (unbuilt solve) without forming W
-  d += problem->d_free;
-  if (regularization != 0.0) d += regularization * lambda;
-}
-
-double SolveContext::residual(const Eigen::VectorXd& lambda) const {
-  Eigen::VectorXd d;
-  computeD(lambda, d);
-  return naturalMapResidual(*problem, mu, lambda, d, ignored);
-}
-
-bool SolveContext::hasFriction() const {
-  for (std::size_t i = 0; i < problem->contacts.size(); ++i)
-    if ((ignored.empty() || !ignored[i]) && hasSlidingFriction(problem->contacts[i].type) && mu[i] > 0.0)
-      return true;
-  return false;
-}
-
-// ---- ContactSolver --------------------------------------------------------------------------
-
-namespace {
-
 using Clock = std::chrono::steady_clock;
-
-bool pyramidModel(const SolverParams& params) {
-  return params.friction_model != FrictionModel::kCoulombDisc;
-}
-
-// Torsional or rolling contacts: only nlgs has their local step.
-bool hasExtendedFriction(const Problem& problem) {
-  for (const Contact& c : problem.contacts)
-    if (c.type == ContactType::kTorsional || c.type == ContactType::kRolling) return true;
-  return false;
-}
-
-// Lemke ends when z0 leaves the basis: exact in exact arithmetic, but on an ill-conditioned
-// W (mass ratios of 1e6, rank deficiency) the basic solution can miss the tolerance by
-// round-off. "converged" means the residual reached the tolerance, for every solver, so
-// that is a numerical failure (the pyramid variant does the same in pyramid.cpp).
-KernelReport honestLemke(KernelReport report, const SolverParams& params) {
-  if (report.status == SolveStatus::kConverged && params.stopping_rule == StoppingRule::kResidual &&
-      report.solver_error > params.tolerance) {
-    report.status = SolveStatus::kNumericalFailure;
-    std::ostringstream message;
-    message << "Lemke's final basis leaves a residual of " << report.solver_error << " > tolerance "
-            << params.tolerance << " (round-off over " << report.iterations
-            << " pivots on an ill-conditioned W); the forces are that basic solution";
-    report.message = message.str();
-  }
-  return report;
-}
-
-// auto (below): the portfolio of the other kernels.
-KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda);
-
-KernelReport runKernel(SolverKind kind, const SolveContext& ctx, Eigen::VectorXd& lambda) {
-  const bool pyramid = pyramidModel(*ctx.params) && ctx.hasFriction();
-  switch (kind) {
-    case SolverKind::kPgs:
-      return pyramid ? runBoxedGaussSeidel(ctx, lambda) : runProjectedGaussSeidel(ctx, lambda);
-    case SolverKind::kLemke:
-      return pyramid ? runPyramidLemke(ctx, lambda) : honestLemke(runLemke(ctx, lambda), *ctx.params);
-    case SolverKind::kApgd: return runApgd(ctx, lambda);
-    case SolverKind::kNewton: return runNewton(ctx, lambda);
-    case SolverKind::kProx: return runProxNewton(ctx, lambda);
-    case SolverKind::kAuto: return runPortfolio(ctx, lambda);
-    case SolverKind::kNlgs: break;
-  }
-  return runNonlinearGaussSeidel(ctx, lambda);
-}
-
-// minW: a contact whose normal self-compliance (regularized) is at most minW gets no force.
-std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<int>& offsets,
-                                    double min_w, double regularization) {
-  std::vector<bool> ignored(problem.contacts.size(), false);
-  if (min_w <= 0.0) return ignored;
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const double w_nn = contactDiagonalBlock(problem, offsets, static_cast<int>(i))(0, 0) + regularization;
-    ignored[i] = w_nn <= min_w;
-  }
-  return ignored;
-}
-
-// Rows the kernels must leave at zero: ignored contacts, tangents of μ = 0 contacts.
-void zeroInactiveRows(const SolveContext& ctx, Eigen::VectorXd& lambda) {
-  const Problem& problem = *ctx.problem;
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const int off = ctx.offsets[i];
-    const Contact& c = problem.contacts[i];
-    if (ctx.ignored[i]) {
-      lambda.segment(off, c.rows).setZero();
-    } else if (hasSlidingFriction(c.type) && ctx.mu[i] == 0.0) {
-      lambda.segment(off + 1, 2).setZero();
-    }
-  }
-}
-
-// maxF: marks contacts whose force norm exceeds the limit; returns how many.
-int dropContactsAboveMaxF(SolveContext& ctx, const Eigen::VectorXd& lambda, double max_f) {
-  int dropped = 0;
-  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
-    if (ctx.ignored[i]) continue;
-    const double force = lambda.segment(ctx.offsets[i], ctx.problem->contacts[i].rows).norm();
-    if (force > max_f) {
-      ctx.ignored[i] = true;
-      ++dropped;
-    }
-  }
-  return dropped;
-}
-
-// Solvers that run on the body form without assembling W (build_lcp = false).
-bool runsUnbuilt(SolverKind kind) {
-  return kind == SolverKind::kAuto || kind == SolverKind::kPgs || kind == SolverKind::kNlgs;
-}
-
-// The problem with the body form replaced by its assembled, block-sparse W.
-Problem assembledProblem(const Problem& problem) {
-  Problem out;
-  out.contacts = problem.contacts;
-  out.d_free = problem.d_free;
-  out.name = problem.name;
-  out.W = problem.bodies->assemble();
-  return out;
-}
-
-// The kernel could not run, or ended on something that is not an approximate solution:
-// its forces must not drive maxF drops nor seed the next warm start.
-bool failedToRun(SolveStatus status) {
-  return status == SolveStatus::kZeroDiagonal || status == SolveStatus::kNotApplicable ||
-         status == SolveStatus::kRayTermination || status == SolveStatus::kNumericalFailure;
-}
-
-// ---- auto: the portfolio ----------------------------------------------------------------
-//
-// auto predicts an order of members from features that do not depend on any benchmark set:
-// the friction law and contact types (what each kernel can solve), the tolerance (Gauss-
-// Seidel and APGD converge linearly or sublinearly, Newton superlinearly), the size (a
-// Newton step factorizes, a sweep or an APGD iteration is one pass over W), the storage
-// (body form: Gauss-Seidel runs unbuilt; block-sparse: a Newton step is a sparse LU), for
-// LCPs W's symmetry (pgs converges for symmetric W, Lemke does not need it), and two
-// estimates of how hard W is for Gauss-Seidel: the normal coupling κ (mean over contacts of
-// Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is diagonally dominant on the normal rows) and rank
-// deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
-// quarter of the contacts with a nearly parallel partner). The start is measured first: a
-// warm start that already meets the tolerance runs no member.
-// Then each member runs in slices of iterations from the best iterate so far: a slice that
-// ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
-// first-order methods) hands over to the next member; a member that fails (not_applicable,
-// zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
-// progresses continues with a doubled slice; once every member ran, a stall hands over to
-// the member with the fastest residual decrease per second, and a member that could not
-// move from the best iterate at all gets one slice from the warm start instead. Members
-// rotate until the tolerance, maxIt
-// (summed over every slice) or time_budget (a slice gets at most half the remaining time
-// while another member is left) ends the solve.
-
-constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pays off
-constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
-constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
-constexpr int kAutoNewtonRowsTight = 1000;
-constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up to this size
-constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
-constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W metric): same body pair
-constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
-constexpr int kAutoLemkeRows = 1000;           // LCPs up to this size may start with Lemke
-// Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
-// below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
-// (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
-constexpr double kAutoSparseGs = 2.0;
-constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
-
-struct AutoFeatures {
-  int rows = 0;
-  double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
-  bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
-  bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
-  bool sparse = false;          // block-sparse W
-  bool symmetric = false;       // W = Wᵀ (to round-off); computed for LCPs only
-};
-
-// The normal coupling κ (above) and the fraction of contacts whose normal row is nearly
-// parallel to another's in the W metric (|W_ij| >= kAutoRedundant √(W_ii W_jj)): several
-// contacts between the same two bodies (a face on a face), i.e. more rows than the bodies'
-// DoF can tell apart, the rank-deficiency estimate when the bodies are not known.
-struct Coupling {
-  double kappa = 0.0;
-  double redundant = 0.0;
-};
-
-Coupling normalCoupling(const SolveContext& ctx) {
-  const Problem& p = *ctx.problem;
-  const int nc = static_cast<int>(p.contacts.size());
-  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0);
-  std::vector<bool> redundant(nc, false);
-  const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  if (dense) {
-    for (int i = 0; i < nc; ++i) diag[i] = (*dense)(ctx.offsets[i], ctx.offsets[i]);
-  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
-    // W_nn of each contact from its stored diagonal block (a one-row window through
-    // diagonalBlock scanned every block row: quadratic in the contacts).
-    for (int i = 0; i < sparse->blockCount() && i < nc; ++i)
-      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
-        if (sparse->block_col[b] == i) diag[i] += sparse->values[sparse->value_start[b]];
-  }
-  auto visit = [&](int i, int j, double w) {
-    off_sum[i] += std::abs(w);
-    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j])) redundant[i] = true;
-  };
-  if (dense) {
-    for (int j = 0; j < nc; ++j) {
-      if (ctx.ignored[j]) continue;
-      for (int i = 0; i < nc; ++i)
-        if (i != j && !ctx.ignored[i]) visit(i, j, (*dense)(ctx.offsets[i], ctx.offsets[j]));
-    }
-  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
-    for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
-      if (ctx.ignored[i]) continue;
-      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
-        const int j = sparse->block_col[b];
-        if (j != i && !ctx.ignored[j]) visit(i, j, sparse->values[sparse->value_start[b]]);
-      }
-    }
-  }
-  double sum = 0.0;
-  int active = 0, repeated = 0;
-  for (int i = 0; i < nc; ++i) {
-    if (ctx.ignored[i] || diag[i] <= 0.0) continue;  // no diagonal: Gauss-Seidel cannot use the row
-    sum += off_sum[i] / diag[i];
-    repeated += redundant[i] ? 1 : 0;
-    ++active;
-  }
-  Coupling c;
-  if (active > 0) {
-    c.kappa = sum / active;
-    c.redundant = static_cast<double>(repeated) / active;
-  }
-  return c;
-}
-
-AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
-  AutoFeatures f;
-  f.rows = ctx.problem->rowCount();
-  f.body_form = static_cast<bool>(ctx.problem->bodies);
-  if (!f.body_form) {
-    const Coupling c = normalCoupling(ctx);
-    f.coupling = c.kappa;
-    f.rank_deficient = c.redundant >= kAutoRedundantShare;
-  }
-  f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
-  if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
-    const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W);
-    const Eigen::MatrixXd W = dense ? Eigen::MatrixXd() : toDense(ctx.problem->W);
-    const Eigen::MatrixXd& M = dense ? *dense : W;
-    const double tol = 1e-12 * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
-    f.symmetric = true;
-    for (Eigen::Index j = 0; j < M.cols() && f.symmetric; ++j)
-      for (Eigen::Index i = j + 1; i < M.rows(); ++i)
-        if (std::abs(M(i, j) - M(j, i)) > tol) {
-          f.symmetric = false;
-          break;
-        }
-  }
-  if (body_dof > 0) {
-    int active_rows = 0;
-    for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i)
-      if (!ctx.ignored[i]) active_rows += ctx.problem->contacts[i].rows;
-    f.rank_deficient = f.rank_deficient || active_rows > body_dof;
-  }
-  return f;
-}
-
-std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f) {
-  using K = SolverKind;
-  const SolverParams& p = *ctx.params;
-  if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
-  if (!ctx.hasFriction() && f.body_form) return {K::kPgs, K::kNewton, K::kApgd};  // unbuilt first: no W
-  if (!ctx.hasFriction()) {
-    // An LCP: projected Gauss-Seidel converges for a symmetric W with positive diagonal;
-    // otherwise (or coupled) Lemke's pivoting is exact and, up to a dense tableau of
-    // kAutoLemkeRows, cheap.
-    if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
-    if (f.symmetric && f.coupling < kAutoDominant) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
-    return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
-  }
-  if (pyramidModel(p)) return {K::kPgs, K::kLemke};
-  if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
-  const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
-  // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
-  // Gauss-Seidel first at any tolerance and size.
-  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-  if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
-    if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
-  }
-  // Tight: Gauss-Seidel only where it contracts fast whatever the size.
-  if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
-  // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
-  // row), so the first-order methods go first and newton/prox take over when they stall.
-  if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
-  const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
-  if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
-  return {K::kApgd, K::kProx, K::kNewton, K::kNlgs};
-}
-
-// Iterations of a member's first slice, and the residual factor a slice must reach to keep
-// the member running.
-int firstSlice(SolverKind kind) {
-  switch (kind) {
-    case SolverKind::kNewton: return 300;  // 20 warm-up sweeps, Newton steps and two nlgs bursts
-    case SolverKind::kProx: return 300;
-    case SolverKind::kApgd: return 200;
-    case SolverKind::kLemke: return 1 << 30;  // pivoting is not sliced
-    default: return 100;
-  }
-}
-double sliceFactor(SolverKind kind) {
-  return kind == SolverKind::kNewton || kind == SolverKind::kProx ? 0.1 : 0.5;
-}
-
-// λ onto the contacts' feasible sets (Coulomb cone, λ_n >= 0); other rows unchanged.
-void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
-  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
-    const Contact& c = ctx.problem->contacts[i];
-    double* l = x.data() + ctx.offsets[i];
-    if (c.type == ContactType::kFrictionless) {
-      l[0] = std::max(0.0, l[0]);
-    } else if (c.type == ContactType::kFrictional && c.rows == 3) {
-      projectOntoCone(ctx.mu[i], l);
-    }
-  }
-}
-
-KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
-  const SolverParams& params = *ctx.params;
-  std::vector<SolverKind> members = autoPlan(ctx, autoFeatures(ctx, ctx.body_dof));
-  Problem assembled;  // the body form's W, assembled only if a member needs it
-  std::vector<int> slice(members.size());
-  for (std::size_t m = 0; m < members.size(); ++m) slice[m] = firstSlice(members[m]);
-  std::vector<double> rate(members.size(), 0.0);  // log residual decrease per second, last slice
-  std::vector<bool> tried(members.size(), false);
-  std::vector<int> retry_origin(members.size(), 0);  // 0 not needed, 1 due, 2 done
-  const Eigen::VectorXd origin = lambda;
-
-  KernelReport report;
-  std::vector<std::pair<std::string, double>>* stages = &report.stages;
-  Eigen::VectorXd best = lambda;
-  // The measure members are compared by: the disc residual, or for a pyramid the kernels'
-  // own pyramid residual (the disc's is nonzero there by design).
-  const bool pyramid = pyramidModel(params) && ctx.hasFriction();
-  const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
-  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : ctx.residual(lambda);
-  if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
-  if (by_residual && best_residual <= params.tolerance) {  // the (warm) start is an answer: path "auto"
-    report.status = SolveStatus::kConverged;
-    report.solver_error = best_residual;
-    return report;
-  }
-  double best_error = best_residual;
-  FrictionModel best_model = FrictionModel::kCoulombDisc;
-  SolveStatus last_failure = SolveStatus::kMaxIterations;
-  std::string last_message;
-  int used = 0;
-  std::size_t m = 0;
-  while (!members.empty()) {
-    const SolverKind kind = members[m];
-    SolverParams member_params = params;
-    member_params.maxIt = std::min(slice[m], params.maxIt - used);
-    SolveContext member = ctx;
-    member.params = &member_params;
-    const Clock::time_point t0 = Clock::now();
-    if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
-      member.deadline = t0 + (ctx.deadline - t0) / 2;
-    }
-    if (ctx.problem->bodies && kind != SolverKind::kNlgs && kind != SolverKind::kPgs) {
-      if (assembled.contacts.empty() && !ctx.problem->contacts.empty()) assembled = assembledProblem(*ctx.problem);
-      member.problem = &assembled;
-    }
-    // From the best iterate; a member that could not move from it at all runs once more
-    // from the portfolio's own start (the warm start), projected onto the feasible sets.
-    const bool from_origin = retry_origin[m] == 1;
-    if (from_origin) retry_origin[m] = 2;
-    Eigen::VectorXd x = from_origin ? origin : best;
-    if (from_origin) projectFeasible(ctx, x);
-    const KernelReport r = runKernel(kind, member, x);
-    // What the solve returns has no force on an ignored contact (minW, maxF): measure that.
-    // A kernel that let one through measured the rest against it (fuzzing: a 1e-18 force
-    // times a W entry of DBL_MAX made a penetrating contact look separated, "converged").
-    const Eigen::VectorXd returned_rows = x;
-    zeroInactiveRows(ctx, x);
-    const bool kernel_measured_x = x == returned_rows;
-    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (stages->empty() || stages->back().first != solverName(kind)) stages->emplace_back(solverName(kind), 0.0);
-    stages->back().second += seconds;
-    report.history.insert(report.history.end(), r.history.begin(), r.history.end());
-    used += r.iterations;
-    const double start_residual = best_residual;
-    // With the residual rule every kernel's solver_error is the residual of what it returned
-    // (a pyramid's own residual for a pyramid); otherwise measure it.
-    const bool own_measure =
-        (by_residual || pyramid) && !failedToRun(r.status) && std::isfinite(r.solver_error) && kernel_measured_x;
-    double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()
-                      : own_measure  ? r.solver_error
-                                     : ctx.residual(x);
-    if (!std::isfinite(residual)) residual = std::numeric_limits<double>::infinity();
-    const bool converged = r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
-    if (residual < best_residual || converged) {
-      best_residual = residual;
-      best = x;
-      best_error = r.solver_error;
-      best_model = r.friction_model;
-    }
-    if (converged || (by_residual && best_residual <= params.tolerance)) {
-      report.status = SolveStatus::kConverged;
-      break;
-    }
-    if (ctx.deadlinePassed()) {
-      report.status = SolveStatus::kTimeBudget;
-      report.message = "auto: time budget (" + std::to_string(params.time_budget) + " s) ran out; best iterate returned";
-      break;
-    }
-    if (used >= params.maxIt) {
-      report.status = SolveStatus::kMaxIterations;
-      report.message = "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
-      break;
-    }
-    if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
-      last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
-      last_message = std::string(solverName(kind)) + ": " + r.message;
-      members.erase(members.begin() + static_cast<long>(m));
-      slice.erase(slice.begin() + static_cast<long>(m));
-      rate.erase(rate.begin() + static_cast<long>(m));
-      tried.erase(tried.begin() + static_cast<long>(m));
-      retry_origin.erase(retry_origin.begin() + static_cast<long>(m));
-      if (m >= members.size()) m = 0;
-      continue;
-    }
-    // Slice used up (iterations or its share of the time): keep the member while it
-    // progresses, otherwise the next one continues from the best iterate.
-    const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(kind) * start_residual;
-    rate[m] = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
-    tried[m] = true;
-    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin) retry_origin[m] = 1;
-    if (progressing) {
-      slice[m] = std::min(2 * slice[m], 1 << 28);
-      continue;
-    }
-    // Stalled: the next member not tried yet, else the one that lowered the residual
-    // fastest for its time (a stalled member keeps its slice; the chosen one doubles it).
-    if (members.size() > 1) {
-      std::size_t next = members.size();
-      for (std::size_t k = 1; k < members.size() && next == members.size(); ++k)
-        if (!tried[(m + k) % members.size()]) next = (m + k) % members.size();
-      if (next == members.size()) {
-        next = (m + 1) % members.size();
-        for (std::size_t k = 0; k < members.size(); ++k)
-          if (rate[k] > rate[next]) next = k;
-        slice[next] = std::min(2 * slice[next], 1 << 28);
-      }
-      m = next;
-    }
-  }
-  if (members.empty()) {
-    report.status = last_failure;
-    report.message = "auto: every member failed; last " + last_message;
-  }
-  lambda = best;
-  report.iterations = used;
-  report.solver_error = std::isfinite(best_error) ? best_error : best_residual;
-  report.friction_model = best_model;
-  return report;
-}
-
-std::string autoPath(const std::vector<std::pair<std::string, double>>& stages) {
-  if (stages.empty()) return "auto";
-  std::string path = "auto:";
-  for (std::size_t i = 0; i < stages.size(); ++i) path += (i ? "->" : "") + stages[i].first;
-  return path;
-}
-
-}  // namespace
 
 ContactSolver::ContactSolver(const SolverParams& params) : params_(params) {}
 
@@ -529,62 +50,6 @@ void ContactSolver::rememberForces(const Problem& problem, const std::vector<int
     warm_start_[problem.contacts[i].id].assign(lambda.data() + offsets[i], lambda.data() + offsets[i] + rows);
   }
 }
-
-namespace {
-
-// A frictional contact whose μ is 0 has two tangent rows that can never carry force.
-bool zeroFriction(const Contact& c, double default_mu) {
-  return c.type == ContactType::kFrictional && (c.mu == 0.0 || (c.mu == Contact::kMuDefault && default_mu == 0.0));
-}
-
-// The problem without those rows: each such contact becomes a 1-row frictionless one, W and
-// d_free keep its normal row only. `kept` maps each reduced row to its row in `p`.
-struct Compaction {
-  Problem reduced;
-  std::vector<int> kept;
-};
-
-Compaction compactZeroFriction(const Problem& p, double default_mu) {
-  Compaction out;
-  out.reduced.name = p.name;
-  out.reduced.contacts = p.contacts;
-  const std::vector<int> offsets = p.rowOffsets();
-  std::vector<std::vector<int>> local(p.contacts.size());  // kept rows of each contact, local index
-  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
-    Contact& c = out.reduced.contacts[i];
-    if (zeroFriction(c, default_mu)) {
-      c.type = ContactType::kFrictionless;
-      c.rows = 1;
-    }
-    for (int k = 0; k < c.rows; ++k) {
-      local[i].push_back(k);
-      out.kept.push_back(offsets[i] + k);
-    }
-  }
-  out.reduced.d_free = p.d_free(out.kept);
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {
-    out.reduced.W = Eigen::MatrixXd((*dense)(out.kept, out.kept));
-    return out;
-  }
-  const auto& W = std::get<BlockSparseMatrix>(p.W);
-  std::vector<int> sizes;
-  for (const Contact& c : out.reduced.contacts) sizes.push_back(c.rows);
-  BlockSparseMatrix R = BlockSparseMatrix::withBlockSizes(sizes);
-  for (int i = 0; i < W.blockCount(); ++i) {
-    R.beginRow();
-    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
-      const int j = W.block_col[b];
-      const int cols = p.contacts[j].rows;
-      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> block(
-          W.values.data() + W.value_start[b], p.contacts[i].rows, cols);
-      R.addBlock(j, Eigen::MatrixXd(block(local[i], local[j])));
-    }
-  }
-  out.reduced.W = std::move(R);
-  return out;
-}
-
-}  // namespace
 
 SolveResult ContactSolver::invalidInput(const std::string& error) const {
   SolveResult result;
@@ -629,76 +94,146 @@ SolveResult ContactSolver::solveInPlace(Problem& problem) {
   return solveStated(problem, start);
 }
 
-SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::steady_clock::time_point start) {
-  SolveResult result;
-  result.solver = solverName(params_.solver);
+// ---- The stages of one solve --------------------------------------------------------------
+//
+// prepare: assemble the body form or stay unbuilt, compact μ = 0 rows, and form the context
+//          the kernels read (row offsets, μ per contact, minW, the deadline);
+// solve:   the kernel, by islands where W splits, again without the contacts maxF drops;
+// finish:  expand the compacted rows, guard against non-finite output, residual and states
+//          recomputed from the returned forces, the messages, and the warm-start memory.
+// (Validation and erp/softness come before, in solve / solveInPlace.)
+
+// What the kernels solve, and what the result reports on. Holds pointers into itself: built
+// in place by prepare, never copied.
+struct ContactSolver::Prepared {
+  const Problem* stated = nullptr;   // after validation and stabilization
+  bool unbuilt = false;              // Gauss-Seidel on the body form, W never assembled
+  Problem assembled;                 // the body form's W, when the kernel needs it
+  const Problem* base = nullptr;     // reported on: `stated` or `assembled`
+  bool compact = false;              // μ = 0 tangent rows left out of `problem`
+  Compaction compaction;
+  const Problem* problem = nullptr;  // solved: `base` or `compaction.reduced`
+  SolveContext ctx;
+
+  Prepared() = default;
+  Prepared(const Prepared&) = delete;
+  Prepared& operator=(const Prepared&) = delete;
+};
+
+namespace {
+
+// Solvers that run on the body form without assembling W (build_lcp = false).
+bool runsUnbuilt(SolverKind kind) {
+  return kind == SolverKind::kAuto || kind == SolverKind::kPgs || kind == SolverKind::kNlgs;
+}
+
+// minW: a contact whose normal self-compliance (regularized) is at most minW gets no force.
+std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<int>& offsets,
+                                    double min_w, double regularization) {
+  std::vector<bool> ignored(problem.contacts.size(), false);
+  if (min_w <= 0.0) return ignored;
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
+    const double w_nn = contactDiagonalBlock(problem, offsets, static_cast<int>(i))(0, 0) + regularization;
+    ignored[i] = w_nn <= min_w;
+  }
+  return ignored;
+}
+
+// maxF: marks contacts whose force norm exceeds the limit; returns how many.
+int dropContactsAboveMaxF(SolveContext& ctx, const Eigen::VectorXd& lambda, double max_f) {
+  int dropped = 0;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    const double force = lambda.segment(ctx.offsets[i], ctx.problem->contacts[i].rows).norm();
+    if (force > max_f) {
+      ctx.ignored[i] = true;
+      ++dropped;
+    }
+  }
+  return dropped;
+}
+
+void appendNote(std::string& message, const std::string& note) {
+  message += std::string(message.empty() ? "" : "; ") + note;
+}
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+void ContactSolver::prepare(const Problem& stated, Clock::time_point start, Prepared& p) const {
+  p.stated = &stated;
   // build_lcp with the body form: Gauss-Seidel runs unbuilt on it (false); every other case
   // assembles the block-sparse W once and solves as usual.
-  const bool unbuilt = stated.bodies && !params_.build_lcp && runsUnbuilt(params_.solver);
-  Problem assembled;
-  if (stated.bodies && !unbuilt) assembled = assembledProblem(stated);
-  const Problem& base = stated.bodies && !unbuilt ? assembled : stated;
+  p.unbuilt = stated.bodies && !params_.build_lcp && runsUnbuilt(params_.solver);
+  if (stated.bodies && !p.unbuilt) p.assembled = assembledProblem(stated);
+  p.base = stated.bodies && !p.unbuilt ? &p.assembled : &stated;
   // μ = 0 contacts cost one row (docs/SOLVERS.md "Contact models"): the kernels run without their
   // tangent rows; forces, d, residual and states are reported on every row of `base`.
-  const bool compact = !unbuilt && std::any_of(base.contacts.begin(), base.contacts.end(), [this](const Contact& c) {
-    return zeroFriction(c, params_.mu);
-  });
-  Compaction compaction;
-  if (compact) compaction = compactZeroFriction(base, params_.mu);
-  const Problem& problem = compact ? compaction.reduced : base;
+  p.compact = !p.unbuilt && std::any_of(p.base->contacts.begin(), p.base->contacts.end(),
+                                        [this](const Contact& c) { return zeroFriction(c, params_.mu); });
+  if (p.compact) p.compaction = compactZeroFriction(*p.base, params_.mu);
+  p.problem = p.compact ? &p.compaction.reduced : p.base;
 
-  SolveContext ctx;
-  ctx.problem = &problem;
+  SolveContext& ctx = p.ctx;
+  ctx.problem = p.problem;
   ctx.params = &params_;
-  ctx.offsets = problem.rowOffsets();
-  ctx.mu = effectiveMu(problem, params_.mu);
+  ctx.offsets = p.problem->rowOffsets();
+  ctx.mu = effectiveMu(*p.problem, params_.mu);
   ctx.regularization = params_.regularizationTerm;
-  ctx.ignored = contactsBelowMinW(problem, ctx.offsets, params_.minW, ctx.regularization);
+  ctx.ignored = contactsBelowMinW(*p.problem, ctx.offsets, params_.minW, ctx.regularization);
   if (params_.time_budget > 0.0) {
     ctx.has_deadline = true;
     ctx.deadline = start + std::chrono::duration_cast<Clock::duration>(
                                std::chrono::duration<double>(std::min(params_.time_budget, 1e7)));
   }
-
-  const SolverKind kind = params_.solver;
-  result.solver = solverName(kind);
-  if (kind != SolverKind::kNlgs && kind != SolverKind::kAuto && hasExtendedFriction(problem)) {
-    result.status = SolveStatus::kNotApplicable;
-    result.message = std::string(solverName(kind)) +
-                     " does not solve torsional or rolling friction (4- and 6-row contacts); use nlgs or auto";
-    result.forces = Eigen::VectorXd::Zero(base.rowCount());
-    result.d = base.d_free;
-    result.states.assign(base.contacts.size(), ContactState::kOpen);
-    // The residual of what is returned (zero forces), as for every other result: found by
-    // fuzzing, it was left at 0, which read as an exact answer.
-    result.residual = naturalMapResidual(base, effectiveMu(base, params_.mu), result.forces, result.d,
-                                         std::vector<bool>(base.contacts.size(), false));
-    result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
-    return result;
-  }
   // auto's rank-deficiency estimate: rows against the bodies' degrees of freedom.
   ctx.body_dof = stated.bodies ? 6 * stated.bodies->bodyCount() : 0;
+}
+
+// Only nlgs has the local step of torsional and rolling contacts: every other kernel refuses
+// them, with zero forces and the residual of those forces.
+bool ContactSolver::refusesExtendedFriction(const Prepared& p, Clock::time_point start, SolveResult& result) const {
+  const SolverKind kind = params_.solver;
+  if (kind == SolverKind::kNlgs || kind == SolverKind::kAuto || !hasExtendedFriction(*p.problem)) return false;
+  const Problem& base = *p.base;
+  result.status = SolveStatus::kNotApplicable;
+  result.message = std::string(solverName(kind)) +
+                   " does not solve torsional or rolling friction (4- and 6-row contacts); use nlgs or auto";
+  result.forces = Eigen::VectorXd::Zero(base.rowCount());
+  result.d = base.d_free;
+  result.states.assign(base.contacts.size(), ContactState::kOpen);
+  // The residual of what is returned (zero forces), as for every other result: found by
+  // fuzzing, it was left at 0, which read as an exact answer.
+  result.residual = naturalMapResidual(base, effectiveMu(base, params_.mu), result.forces, result.d,
+                                       std::vector<bool>(base.contacts.size(), false));
+  result.solve_time = secondsSince(start);
+  return true;
+}
+
+KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, SolveResult& result) const {
+  SolveContext& ctx = p.ctx;
+  const SolverKind kind = params_.solver;
   // Independent islands of W are solved apart (islands.h), built once for every maxF pass.
   std::unique_ptr<IslandSolver> islands;
   // Newton on the disc stays whole: its globalisation (nlgs warm-up and bursts, ε from the
   // residual) reaches 1e-8 on Capsules-i101-404 whole but not on one of its 32 islands alone.
   const bool split = kind != SolverKind::kNewton || !ctx.hasFriction();
-  if (params_.islands && split && !params_.displayDebug && problem.contacts.size() > 1) {
-    Islands found = findIslands(problem);
+  if (params_.islands && split && !params_.displayDebug && p.problem->contacts.size() > 1) {
+    Islands found = findIslands(*p.problem);
     if (found.count() > 1) islands = std::make_unique<IslandSolver>(ctx, std::move(found));
   }
   const int threads = params_.threads > 0 ? params_.threads : defaultThreadCount();
-  Eigen::VectorXd lambda = initialGuess(problem, ctx.offsets);
+  const auto kernel = [kind](const SolveContext& c, Eigen::VectorXd& l) { return runKernel(kind, c, l); };
   KernelReport report;
   // maxF: drop the contacts above the limit and solve the rest again, so the remaining
   // forces are consistent with the contacts that are left. Each pass drops at least one
   // contact, so this ends.
   for (;;) {
     zeroInactiveRows(ctx, lambda);
-    const KernelReport pass =
-        islands ? islands->run(ctx, [kind](const SolveContext& c, Eigen::VectorXd& l) { return runKernel(kind, c, l); },
-                               lambda, threads)
-                : runKernel(kind, ctx, lambda);
+    const KernelReport pass = islands ? islands->run(ctx, kernel, lambda, threads) : kernel(ctx, lambda);
     report.status = pass.status;
     report.message = pass.message;
     report.solver_error = pass.solver_error;
@@ -715,40 +250,50 @@ SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::stead
   }
   zeroInactiveRows(ctx, lambda);
   if (kind == SolverKind::kAuto) result.solver = autoPath(result.stages);
+  return report;
+}
 
+// finish, first part: forces and d on every row of `base`, never a non-finite number.
+void ContactSolver::expandForces(const Prepared& p, Eigen::VectorXd lambda, KernelReport& report,
+                                 SolveResult& result) const {
   if (!lambda.allFinite()) {  // kernels promise finite output; this is the last guard
     lambda.setZero();
     report.status = SolveStatus::kNumericalFailure;
     report.message = "the solver produced a non-finite force; forces reset to zero";
   }
-  result.forces = lambda;
-  ctx.computeD(lambda, result.d);
+  result.forces = std::move(lambda);
+  p.ctx.computeD(result.forces, result.d);
   if (!result.d.allFinite()) {
     result.d.setZero();
     result.forces.setZero();
     report.status = SolveStatus::kNumericalFailure;
     report.message = "W λ overflowed; forces reset to zero";
   }
-  if (compact) {  // back to every row: the dropped tangent rows carry no force
-    Eigen::VectorXd forces = Eigen::VectorXd::Zero(base.rowCount());
-    forces(compaction.kept) = result.forces;
-    Eigen::VectorXd d;
-    multiply(base.W, forces, d);
-    d += base.d_free;
-    d(compaction.kept) = result.d;  // the solved rows as solved (regularization included)
-    if (!d.allFinite()) {
-      d.setZero();
-      forces.setZero();
-      report.status = SolveStatus::kNumericalFailure;
-      report.message = "W λ overflowed; forces reset to zero";
-    }
-    result.forces = std::move(forces);
-    result.d = std::move(d);
+  if (!p.compact) return;
+  // Back to every row: the dropped tangent rows carry no force.
+  const Problem& base = *p.base;
+  Eigen::VectorXd forces = Eigen::VectorXd::Zero(base.rowCount());
+  forces(p.compaction.kept) = result.forces;
+  Eigen::VectorXd d;
+  multiply(base.W, forces, d);
+  d += base.d_free;
+  d(p.compaction.kept) = result.d;  // the solved rows as solved (regularization included)
+  if (!d.allFinite()) {
+    d.setZero();
+    forces.setZero();
+    report.status = SolveStatus::kNumericalFailure;
+    report.message = "W λ overflowed; forces reset to zero";
   }
-  const std::vector<double> reported_mu = compact ? effectiveMu(base, params_.mu) : ctx.mu;
-  result.residual = naturalMapResidual(base, reported_mu, result.forces, result.d, ctx.ignored);
-  result.states = classifyContacts(base, reported_mu, result.forces, ctx.ignored);
-  result.status = report.status;
+  result.forces = std::move(forces);
+  result.d = std::move(d);
+}
+
+// finish, second part: residual, states and status from the returned forces.
+void ContactSolver::measureResult(const Prepared& p, KernelReport& report, SolveResult& result) const {
+  const Problem& base = *p.base;
+  const std::vector<double> reported_mu = p.compact ? effectiveMu(base, params_.mu) : p.ctx.mu;
+  result.residual = naturalMapResidual(base, reported_mu, result.forces, result.d, p.ctx.ignored);
+  result.states = classifyContacts(base, reported_mu, result.forces, p.ctx.ignored);
   if (report.status == SolveStatus::kConverged && params_.stopping_rule == StoppingRule::kResidual &&
       report.friction_model == FrictionModel::kCoulombDisc && !(result.residual <= params_.tolerance)) {
     // "converged" promises the residual of what is returned; a kernel's own measure that
@@ -756,20 +301,25 @@ SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::stead
     std::ostringstream note;
     note << "the solver reported convergence, but the residual recomputed from the returned forces is "
          << result.residual << " > tolerance " << params_.tolerance;
-    report.message += std::string(report.message.empty() ? "" : "; ") + note.str();
+    appendNote(report.message, note.str());
     report.status = SolveStatus::kMaxIterations;
-    result.status = report.status;
   }
+  result.status = report.status;
   result.converged = report.status == SolveStatus::kConverged;
   result.iterations = report.iterations;
   result.solver_error = std::isfinite(report.solver_error) ? report.solver_error : 0.0;
   result.message = report.message;
   result.friction_model = report.friction_model;
-  if (pyramidModel(params_) && report.friction_model == FrictionModel::kCoulombDisc && ctx.hasFriction() &&
+  result.residual_history = std::move(report.history);
+  result.unbuilt = p.unbuilt;
+}
+
+// finish, third part: what the numbers alone do not say (friction law solved, body form).
+void ContactSolver::explainResult(const Prepared& p, SolveResult& result) const {
+  if (pyramidModel(params_) && result.friction_model == FrictionModel::kCoulombDisc && p.ctx.hasFriction() &&
       !failedToRun(result.status)) {
-    result.message += std::string(result.message.empty() ? "" : "; ") + "friction_model " +
-                      frictionModelName(params_.friction_model) + " applies to pgs and lemke; " +
-                      result.solver + " solved the Coulomb disc";
+    appendNote(result.message, std::string("friction_model ") + frictionModelName(params_.friction_model) +
+                                   " applies to pgs and lemke; " + result.solver + " solved the Coulomb disc");
   }
   if (result.friction_model != FrictionModel::kCoulombDisc && result.converged) {
     // "converged" is about the law that was solved; say so, since `residual` (Coulomb's
@@ -778,24 +328,33 @@ SolveResult ContactSolver::solveStated(const Problem& stated, std::chrono::stead
     note << "converged on the " << frictionModelName(result.friction_model) << " friction law (its residual "
          << result.solver_error << " <= tolerance); residual " << result.residual
          << " is the distance to Coulomb's disc, nonzero by design";
-    result.message += std::string(result.message.empty() ? "" : "; ") + note.str();
+    appendNote(result.message, note.str());
   }
-  result.residual_history = std::move(report.history);
-  result.unbuilt = unbuilt;
-  if (!params_.build_lcp) {
-    std::string note;
-    if (unbuilt) {
-      note = "unbuilt solve on the body form (" + std::to_string(stated.bodies->bodyCount()) + " bodies)";
-    } else if (stated.bodies) {
-      note = std::string("build_lcp=false: ") + solverName(params_.solver) +
-             " needs the assembled W; assembled it from the body form (block-sparse)";
-    } else {
-      note = "build_lcp=false needs the body form of the compliance; solved on the assembled W";
-    }
-    result.message += std::string(result.message.empty() ? "" : "; ") + note;
+  if (params_.build_lcp) return;
+  const Problem& stated = *p.stated;
+  if (p.unbuilt) {
+    appendNote(result.message, "unbuilt solve on the body form (" + std::to_string(stated.bodies->bodyCount()) + " bodies)");
+  } else if (stated.bodies) {
+    appendNote(result.message, std::string("build_lcp=false: ") + solverName(params_.solver) +
+                                   " needs the assembled W; assembled it from the body form (block-sparse)");
+  } else {
+    appendNote(result.message, "build_lcp=false needs the body form of the compliance; solved on the assembled W");
   }
-  if (!failedToRun(result.status)) rememberForces(base, base.rowOffsets(), result.forces);
-  result.solve_time = std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+SolveResult ContactSolver::solveStated(const Problem& stated, Clock::time_point start) {
+  SolveResult result;
+  result.solver = solverName(params_.solver);
+  Prepared prepared;
+  prepare(stated, start, prepared);
+  if (refusesExtendedFriction(prepared, start, result)) return result;
+  Eigen::VectorXd lambda = initialGuess(*prepared.problem, prepared.ctx.offsets);
+  KernelReport report = solvePrepared(prepared, lambda, result);
+  expandForces(prepared, std::move(lambda), report, result);
+  measureResult(prepared, report, result);
+  explainResult(prepared, result);
+  if (!failedToRun(result.status)) rememberForces(*prepared.base, prepared.base->rowOffsets(), result.forces);
+  result.solve_time = secondsSince(start);
   return result;
 }
 
@@ -805,33 +364,6 @@ SolveResult solveProblem(const Problem& problem, const SolverParams& params) {
   no_warm_start.initial_guess = false;
   solver.setParams(no_warm_start);
   return solver.solve(problem);
-}
-
-// ---- names ----------------------------------------------------------------------------------
-
-const char* statusName(SolveStatus status) {
-  switch (status) {
-    case SolveStatus::kConverged: return "converged";
-    case SolveStatus::kMaxIterations: return "max_iterations";
-    case SolveStatus::kZeroDiagonal: return "zero_diagonal";
-    case SolveStatus::kNotApplicable: return "not_applicable";
-    case SolveStatus::kRayTermination: return "ray_termination";
-    case SolveStatus::kNumericalFailure: return "numerical_failure";
-    case SolveStatus::kInvalidInput: return "invalid_input";
-    case SolveStatus::kTimeBudget: return "time_budget";
-  }
-  return "unknown";
-}
-
-const char* stateName(ContactState state) {
-  switch (state) {
-    case ContactState::kOpen: return "open";
-    case ContactState::kStick: return "stick";
-    case ContactState::kSlip: return "slip";
-    case ContactState::kIgnored: return "ignored";
-    case ContactState::kClosed: return "closed";
-  }
-  return "unknown";
 }
 
 }  // namespace lcp_contact_solver::core

@@ -1,115 +1,83 @@
 #include "lcp_contact_solver/core/solver_params.h"
 
 #include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
 
 namespace lcp_contact_solver::core {
 
 namespace {
 
-struct SolverEntry {
-  SolverKind kind;
+// One table per enum: its values and their names, read by the name, parse and list functions.
+template <class Enum>
+struct Named {
+  Enum value;
   const char* name;
 };
 
-constexpr SolverEntry kSolvers[] = {
-    {SolverKind::kAuto, "auto"},
-    {SolverKind::kPgs, "pgs"},
-    {SolverKind::kNlgs, "nlgs"},
-    {SolverKind::kLemke, "lemke"},
-    {SolverKind::kApgd, "apgd"},
-    {SolverKind::kNewton, "newton"},
+constexpr Named<SolverKind> kSolvers[] = {
+    {SolverKind::kAuto, "auto"},   {SolverKind::kPgs, "pgs"},       {SolverKind::kNlgs, "nlgs"},
+    {SolverKind::kLemke, "lemke"}, {SolverKind::kApgd, "apgd"},     {SolverKind::kNewton, "newton"},
     {SolverKind::kProx, "prox"},
 };
-
-struct FrictionModelEntry {
-  FrictionModel model;
-  const char* name;
-};
-
-constexpr FrictionModelEntry kFrictionModels[] = {
+constexpr Named<FrictionModel> kFrictionModels[] = {
     {FrictionModel::kCoulombDisc, "disc"},
     {FrictionModel::kPyramid4, "pyramid4"},
     {FrictionModel::kPyramid8, "pyramid8"},
 };
+constexpr Named<StoppingRule> kStoppingRules[] = {
+    {StoppingRule::kResidual, "residual"},
+    {StoppingRule::kSofa, "sofa"},
+};
+constexpr Named<ConstraintLevel> kConstraintLevels[] = {
+    {ConstraintLevel::kPosition, "position"},
+    {ConstraintLevel::kVelocity, "velocity"},
+};
+
+template <class Enum, std::size_t N>
+const char* nameOf(const Named<Enum> (&table)[N], Enum value) {
+  for (const auto& entry : table)
+    if (entry.value == value) return entry.name;
+  return "unknown";
+}
+
+template <class Enum, std::size_t N>
+bool parseName(const Named<Enum> (&table)[N], const std::string& name, Enum* value) {
+  for (const auto& entry : table) {
+    if (name == entry.name) {
+      *value = entry.value;
+      return true;
+    }
+  }
+  return false;
+}
+
+template <class Enum, std::size_t N>
+std::vector<std::string> namesOf(const Named<Enum> (&table)[N]) {
+  std::vector<std::string> names;
+  for (const auto& entry : table) names.emplace_back(entry.name);
+  return names;
+}
 
 }  // namespace
 
-const char* solverName(SolverKind kind) {
-  for (const auto& entry : kSolvers)
-    if (entry.kind == kind) return entry.name;
-  return "unknown";
-}
+const char* solverName(SolverKind kind) { return nameOf(kSolvers, kind); }
+bool parseSolverName(const std::string& name, SolverKind* kind) { return parseName(kSolvers, name, kind); }
+std::vector<std::string> solverNames() { return namesOf(kSolvers); }
 
-bool parseSolverName(const std::string& name, SolverKind* kind) {
-  for (const auto& entry : kSolvers) {
-    if (name == entry.name) {
-      *kind = entry.kind;
-      return true;
-    }
-  }
-  return false;
-}
+const char* stoppingRuleName(StoppingRule rule) { return nameOf(kStoppingRules, rule); }
+bool parseStoppingRule(const std::string& name, StoppingRule* rule) { return parseName(kStoppingRules, name, rule); }
 
-std::vector<std::string> solverNames() {
-  std::vector<std::string> names;
-  for (const auto& entry : kSolvers) names.emplace_back(entry.name);
-  return names;
-}
-
-const char* stoppingRuleName(StoppingRule rule) {
-  return rule == StoppingRule::kSofa ? "sofa" : "residual";
-}
-
-bool parseStoppingRule(const std::string& name, StoppingRule* rule) {
-  if (name == "residual") {
-    *rule = StoppingRule::kResidual;
-  } else if (name == "sofa") {
-    *rule = StoppingRule::kSofa;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-const char* frictionModelName(FrictionModel model) {
-  for (const auto& entry : kFrictionModels)
-    if (entry.model == model) return entry.name;
-  return "unknown";
-}
-
+const char* frictionModelName(FrictionModel model) { return nameOf(kFrictionModels, model); }
 bool parseFrictionModel(const std::string& name, FrictionModel* model) {
-  for (const auto& entry : kFrictionModels) {
-    if (name == entry.name) {
-      *model = entry.model;
-      return true;
-    }
-  }
-  return false;
+  return parseName(kFrictionModels, name, model);
 }
+std::vector<std::string> frictionModelNames() { return namesOf(kFrictionModels); }
 
-std::vector<std::string> frictionModelNames() {
-  std::vector<std::string> names;
-  for (const auto& entry : kFrictionModels) names.emplace_back(entry.name);
-  return names;
-}
-
-const char* constraintLevelName(ConstraintLevel level) {
-  switch (level) {
-    case ConstraintLevel::kPosition: return "position";
-    case ConstraintLevel::kVelocity: return "velocity";
-  }
-  return "unknown";
-}
-
+const char* constraintLevelName(ConstraintLevel level) { return nameOf(kConstraintLevels, level); }
 bool parseConstraintLevel(const std::string& name, ConstraintLevel* level) {
-  if (name == "position") {
-    *level = ConstraintLevel::kPosition;
-  } else if (name == "velocity") {
-    *level = ConstraintLevel::kVelocity;
-  } else {
-    return false;
-  }
-  return true;
+  return parseName(kConstraintLevels, name, level);
 }
 
 std::string validateParams(const SolverParams& p) {

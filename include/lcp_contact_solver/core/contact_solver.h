@@ -17,6 +17,8 @@
 
 namespace lcp_contact_solver::core {
 
+struct KernelReport;
+
 class ContactSolver {
  public:
   explicit ContactSolver(const SolverParams& params = SolverParams());
@@ -39,8 +41,19 @@ class ContactSolver {
   std::size_t warmStartSize() const { return warm_start_.size(); }
 
  private:
-  // After validation and stabilization: `stated` is the problem as solved.
-  SolveResult solveStated(const Problem& stated, std::chrono::steady_clock::time_point start);
+  using Clock = std::chrono::steady_clock;
+  struct Prepared;  // what the kernels solve and what the result reports on
+
+  // After validation and stabilization: `stated` is the problem as solved. The stages below
+  // in order (contact_solver.cpp): prepare, solvePrepared, expandForces, measureResult,
+  // explainResult.
+  SolveResult solveStated(const Problem& stated, Clock::time_point start);
+  void prepare(const Problem& stated, Clock::time_point start, Prepared& p) const;
+  bool refusesExtendedFriction(const Prepared& p, Clock::time_point start, SolveResult& result) const;
+  KernelReport solvePrepared(Prepared& p, Eigen::VectorXd& lambda, SolveResult& result) const;
+  void expandForces(const Prepared& p, Eigen::VectorXd lambda, KernelReport& report, SolveResult& result) const;
+  void measureResult(const Prepared& p, KernelReport& report, SolveResult& result) const;
+  void explainResult(const Prepared& p, SolveResult& result) const;
   SolveResult invalidInput(const std::string& error) const;
   Eigen::VectorXd initialGuess(const Problem& problem, const std::vector<int>& offsets) const;
   void rememberForces(const Problem& problem, const std::vector<int>& offsets,

@@ -1,0 +1,368 @@
+#include "portfolio.h"
+
+#include "kernel_dispatch.h"
+
+#include "lcp_contact_solver/core/body_compliance.h"
+#include "lcp_contact_solver/core/residual.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace lcp_contact_solver::core {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// ---- auto: the portfolio ----------------------------------------------------------------
+//
+// auto predicts an order of members from features that do not depend on any benchmark set:
+// the friction law and contact types (what each kernel can solve), the tolerance (Gauss-
+// Seidel and APGD converge linearly or sublinearly, Newton superlinearly), the size (a
+// Newton step factorizes, a sweep or an APGD iteration is one pass over W), the storage
+// (body form: Gauss-Seidel runs unbuilt; block-sparse: a Newton step is a sparse LU), for
+// LCPs W's symmetry (pgs converges for symmetric W, Lemke does not need it), and two
+// estimates of how hard W is for Gauss-Seidel: the normal coupling κ (mean over contacts of
+// Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is diagonally dominant on the normal rows) and rank
+// deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
+// quarter of the contacts with a nearly parallel partner). The start is measured first: a
+// warm start that already meets the tolerance runs no member.
+// Then each member runs in slices of iterations from the best iterate so far: a slice that
+// ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
+// first-order methods) hands over to the next member; a member that fails (not_applicable,
+// zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
+// progresses continues with a doubled slice; once every member ran, a stall hands over to
+// the member with the fastest residual decrease per second, and a member that could not
+// move from the best iterate at all gets one slice from the warm start instead. Members
+// rotate until the tolerance, maxIt
+// (summed over every slice) or time_budget (a slice gets at most half the remaining time
+// while another member is left) ends the solve.
+
+constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pays off
+constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
+constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
+constexpr int kAutoNewtonRowsTight = 1000;
+constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up to this size
+constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
+constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W metric): same body pair
+constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
+constexpr int kAutoLemkeRows = 1000;           // LCPs up to this size may start with Lemke
+// Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
+// below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
+// (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
+constexpr double kAutoSparseGs = 2.0;
+constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+
+struct AutoFeatures {
+  int rows = 0;
+  double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
+  bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
+  bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
+  bool sparse = false;          // block-sparse W
+  bool symmetric = false;       // W = Wᵀ (to round-off); computed for LCPs only
+};
+
+// The normal coupling κ (above) and the fraction of contacts whose normal row is nearly
+// parallel to another's in the W metric (|W_ij| >= kAutoRedundant √(W_ii W_jj)): several
+// contacts between the same two bodies (a face on a face), i.e. more rows than the bodies'
+// DoF can tell apart, the rank-deficiency estimate when the bodies are not known.
+struct Coupling {
+  double kappa = 0.0;
+  double redundant = 0.0;
+};
+
+Coupling normalCoupling(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  const int nc = static_cast<int>(p.contacts.size());
+  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0);
+  std::vector<bool> redundant(nc, false);
+  const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
+  if (dense) {
+    for (int i = 0; i < nc; ++i) diag[i] = (*dense)(ctx.offsets[i], ctx.offsets[i]);
+  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
+    // W_nn of each contact from its stored diagonal block (a one-row window through
+    // diagonalBlock scanned every block row: quadratic in the contacts).
+    for (int i = 0; i < sparse->blockCount() && i < nc; ++i)
+      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
+        if (sparse->block_col[b] == i) diag[i] += sparse->values[sparse->value_start[b]];
+  }
+  auto visit = [&](int i, int j, double w) {
+    off_sum[i] += std::abs(w);
+    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j])) redundant[i] = true;
+  };
+  if (dense) {
+    for (int j = 0; j < nc; ++j) {
+      if (ctx.ignored[j]) continue;
+      for (int i = 0; i < nc; ++i)
+        if (i != j && !ctx.ignored[i]) visit(i, j, (*dense)(ctx.offsets[i], ctx.offsets[j]));
+    }
+  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
+    for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
+      if (ctx.ignored[i]) continue;
+      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
+        const int j = sparse->block_col[b];
+        if (j != i && !ctx.ignored[j]) visit(i, j, sparse->values[sparse->value_start[b]]);
+      }
+    }
+  }
+  double sum = 0.0;
+  int active = 0, repeated = 0;
+  for (int i = 0; i < nc; ++i) {
+    if (ctx.ignored[i] || diag[i] <= 0.0) continue;  // no diagonal: Gauss-Seidel cannot use the row
+    sum += off_sum[i] / diag[i];
+    repeated += redundant[i] ? 1 : 0;
+    ++active;
+  }
+  Coupling c;
+  if (active > 0) {
+    c.kappa = sum / active;
+    c.redundant = static_cast<double>(repeated) / active;
+  }
+  return c;
+}
+
+AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
+  AutoFeatures f;
+  f.rows = ctx.problem->rowCount();
+  f.body_form = static_cast<bool>(ctx.problem->bodies);
+  if (!f.body_form) {
+    const Coupling c = normalCoupling(ctx);
+    f.coupling = c.kappa;
+    f.rank_deficient = c.redundant >= kAutoRedundantShare;
+  }
+  f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
+  if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
+    const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W);
+    const Eigen::MatrixXd W = dense ? Eigen::MatrixXd() : toDense(ctx.problem->W);
+    const Eigen::MatrixXd& M = dense ? *dense : W;
+    const double tol = 1e-12 * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
+    f.symmetric = true;
+    for (Eigen::Index j = 0; j < M.cols() && f.symmetric; ++j)
+      for (Eigen::Index i = j + 1; i < M.rows(); ++i)
+        if (std::abs(M(i, j) - M(j, i)) > tol) {
+          f.symmetric = false;
+          break;
+        }
+  }
+  if (body_dof > 0) {
+    int active_rows = 0;
+    for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i)
+      if (!ctx.ignored[i]) active_rows += ctx.problem->contacts[i].rows;
+    f.rank_deficient = f.rank_deficient || active_rows > body_dof;
+  }
+  return f;
+}
+
+std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f) {
+  using K = SolverKind;
+  const SolverParams& p = *ctx.params;
+  if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
+  if (!ctx.hasFriction() && f.body_form) return {K::kPgs, K::kNewton, K::kApgd};  // unbuilt first: no W
+  if (!ctx.hasFriction()) {
+    // An LCP: projected Gauss-Seidel converges for a symmetric W with positive diagonal;
+    // otherwise (or coupled) Lemke's pivoting is exact and, up to a dense tableau of
+    // kAutoLemkeRows, cheap.
+    if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
+    if (f.symmetric && f.coupling < kAutoDominant) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
+    return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
+  }
+  if (pyramidModel(p)) return {K::kPgs, K::kLemke};
+  if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
+  const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
+  // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
+  // Gauss-Seidel first at any tolerance and size.
+  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+  if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
+    if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  }
+  // Tight: Gauss-Seidel only where it contracts fast whatever the size.
+  if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
+  // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
+  // row), so the first-order methods go first and newton/prox take over when they stall.
+  if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
+  if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
+  return {K::kApgd, K::kProx, K::kNewton, K::kNlgs};
+}
+
+// Iterations of a member's first slice, and the residual factor a slice must reach to keep
+// the member running.
+int firstSlice(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::kNewton: return 300;  // 20 warm-up sweeps, Newton steps and two nlgs bursts
+    case SolverKind::kProx: return 300;
+    case SolverKind::kApgd: return 200;
+    case SolverKind::kLemke: return 1 << 30;  // pivoting is not sliced
+    default: return 100;
+  }
+}
+double sliceFactor(SolverKind kind) {
+  return kind == SolverKind::kNewton || kind == SolverKind::kProx ? 0.1 : 0.5;
+}
+
+// λ onto the contacts' feasible sets (Coulomb cone, λ_n >= 0); other rows unchanged.
+void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    const Contact& c = ctx.problem->contacts[i];
+    double* l = x.data() + ctx.offsets[i];
+    if (c.type == ContactType::kFrictionless) {
+      l[0] = std::max(0.0, l[0]);
+    } else if (c.type == ContactType::kFrictional && c.rows == 3) {
+      projectOntoCone(ctx.mu[i], l);
+    }
+  }
+}
+
+}  // namespace
+
+KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
+  const SolverParams& params = *ctx.params;
+  std::vector<SolverKind> members = autoPlan(ctx, autoFeatures(ctx, ctx.body_dof));
+  Problem assembled;  // the body form's W, assembled only if a member needs it
+  std::vector<int> slice(members.size());
+  for (std::size_t m = 0; m < members.size(); ++m) slice[m] = firstSlice(members[m]);
+  std::vector<double> rate(members.size(), 0.0);  // log residual decrease per second, last slice
+  std::vector<bool> tried(members.size(), false);
+  std::vector<int> retry_origin(members.size(), 0);  // 0 not needed, 1 due, 2 done
+  const Eigen::VectorXd origin = lambda;
+
+  KernelReport report;
+  std::vector<std::pair<std::string, double>>* stages = &report.stages;
+  Eigen::VectorXd best = lambda;
+  // The measure members are compared by: the disc residual, or for a pyramid the kernels'
+  // own pyramid residual (the disc's is nonzero there by design).
+  const bool pyramid = pyramidModel(params) && ctx.hasFriction();
+  const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
+  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : ctx.residual(lambda);
+  if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
+  if (by_residual && best_residual <= params.tolerance) {  // the (warm) start is an answer: path "auto"
+    report.status = SolveStatus::kConverged;
+    report.solver_error = best_residual;
+    return report;
+  }
+  double best_error = best_residual;
+  FrictionModel best_model = FrictionModel::kCoulombDisc;
+  SolveStatus last_failure = SolveStatus::kMaxIterations;
+  std::string last_message;
+  int used = 0;
+  std::size_t m = 0;
+  while (!members.empty()) {
+    const SolverKind kind = members[m];
+    SolverParams member_params = params;
+    member_params.maxIt = std::min(slice[m], params.maxIt - used);
+    SolveContext member = ctx;
+    member.params = &member_params;
+    const Clock::time_point t0 = Clock::now();
+    if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
+      member.deadline = t0 + (ctx.deadline - t0) / 2;
+    }
+    if (ctx.problem->bodies && kind != SolverKind::kNlgs && kind != SolverKind::kPgs) {
+      if (assembled.contacts.empty() && !ctx.problem->contacts.empty()) assembled = assembledProblem(*ctx.problem);
+      member.problem = &assembled;
+    }
+    // From the best iterate; a member that could not move from it at all runs once more
+    // from the portfolio's own start (the warm start), projected onto the feasible sets.
+    const bool from_origin = retry_origin[m] == 1;
+    if (from_origin) retry_origin[m] = 2;
+    Eigen::VectorXd x = from_origin ? origin : best;
+    if (from_origin) projectFeasible(ctx, x);
+    const KernelReport r = runKernel(kind, member, x);
+    // What the solve returns has no force on an ignored contact (minW, maxF): measure that.
+    // A kernel that let one through measured the rest against it (fuzzing: a 1e-18 force
+    // times a W entry of DBL_MAX made a penetrating contact look separated, "converged").
+    const Eigen::VectorXd returned_rows = x;
+    zeroInactiveRows(ctx, x);
+    const bool kernel_measured_x = x == returned_rows;
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (stages->empty() || stages->back().first != solverName(kind)) stages->emplace_back(solverName(kind), 0.0);
+    stages->back().second += seconds;
+    report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    used += r.iterations;
+    const double start_residual = best_residual;
+    // With the residual rule every kernel's solver_error is the residual of what it returned
+    // (a pyramid's own residual for a pyramid); otherwise measure it.
+    const bool own_measure =
+        (by_residual || pyramid) && !failedToRun(r.status) && std::isfinite(r.solver_error) && kernel_measured_x;
+    double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()
+                      : own_measure  ? r.solver_error
+                                     : ctx.residual(x);
+    if (!std::isfinite(residual)) residual = std::numeric_limits<double>::infinity();
+    const bool converged = r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
+    if (residual < best_residual || converged) {
+      best_residual = residual;
+      best = x;
+      best_error = r.solver_error;
+      best_model = r.friction_model;
+    }
+    if (converged || (by_residual && best_residual <= params.tolerance)) {
+      report.status = SolveStatus::kConverged;
+      break;
+    }
+    if (ctx.deadlinePassed()) {
+      report.status = SolveStatus::kTimeBudget;
+      report.message = "auto: time budget (" + std::to_string(params.time_budget) + " s) ran out; best iterate returned";
+      break;
+    }
+    if (used >= params.maxIt) {
+      report.status = SolveStatus::kMaxIterations;
+      report.message = "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
+      break;
+    }
+    if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
+      last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
+      last_message = std::string(solverName(kind)) + ": " + r.message;
+      members.erase(members.begin() + static_cast<long>(m));
+      slice.erase(slice.begin() + static_cast<long>(m));
+      rate.erase(rate.begin() + static_cast<long>(m));
+      tried.erase(tried.begin() + static_cast<long>(m));
+      retry_origin.erase(retry_origin.begin() + static_cast<long>(m));
+      if (m >= members.size()) m = 0;
+      continue;
+    }
+    // Slice used up (iterations or its share of the time): keep the member while it
+    // progresses, otherwise the next one continues from the best iterate.
+    const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(kind) * start_residual;
+    rate[m] = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
+    tried[m] = true;
+    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin) retry_origin[m] = 1;
+    if (progressing) {
+      slice[m] = std::min(2 * slice[m], 1 << 28);
+      continue;
+    }
+    // Stalled: the next member not tried yet, else the one that lowered the residual
+    // fastest for its time (a stalled member keeps its slice; the chosen one doubles it).
+    if (members.size() > 1) {
+      std::size_t next = members.size();
+      for (std::size_t k = 1; k < members.size() && next == members.size(); ++k)
+        if (!tried[(m + k) % members.size()]) next = (m + k) % members.size();
+      if (next == members.size()) {
+        next = (m + 1) % members.size();
+        for (std::size_t k = 0; k < members.size(); ++k)
+          if (rate[k] > rate[next]) next = k;
+        slice[next] = std::min(2 * slice[next], 1 << 28);
+      }
+      m = next;
+    }
+  }
+  if (members.empty()) {
+    report.status = last_failure;
+    report.message = "auto: every member failed; last " + last_message;
+  }
+  lambda = best;
+  report.iterations = used;
+  report.solver_error = std::isfinite(best_error) ? best_error : best_residual;
+  report.friction_model = best_model;
+  return report;
+}
+
+std::string autoPath(const std::vector<std::pair<std::string, double>>& stages) {
+  if (stages.empty()) return "auto";
+  std::string path = "auto:";
+  for (std::size_t i = 0; i < stages.size(); ++i) path += (i ? "->" : "") + stages[i].first;
+  return path;
+}
+
+}  // namespace lcp_contact_solver::core

@@ -1,0 +1,22 @@
+// auto: the portfolio of the other kernels (its rules are written above runPortfolio in
+// portfolio.cpp and in docs/ARCHITECTURE.md). Private to the core library.
+#pragma once
+
+#include "lcp_contact_solver/core/kernels/kernels.h"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lcp_contact_solver::core {
+
+// Solves from `lambda` with the members auto predicts, handing over on stalls and failures;
+// maxIt and time_budget bound the whole path. report.stages holds each member's time.
+KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda);
+
+// stats.solver of an auto solve: "auto:" and the members in the order they ran.
+std::string autoPath(const std::vector<std::pair<std::string, double>>& stages);
+
+}  // namespace lcp_contact_solver::core
