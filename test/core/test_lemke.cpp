@@ -1,4 +1,4 @@
-// Lexicographic Lemke (src/core/lemke.cpp), through the kernel and through ContactSolver.
+// Lexicographic Lemke (src/core/kernels/lemke.cpp), through the kernel and through ContactSolver.
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"

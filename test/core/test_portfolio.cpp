@@ -1,4 +1,4 @@
-// auto, the portfolio (contact_solver.cpp): problems built so that the first member fails or
+// auto, the portfolio (src/core/portfolio.cpp): problems built so that the first member fails or
 // stalls and another must carry the solve. Every residual is recomputed here from the
 // returned forces (d = W λ + d_free), independently of the solver's own report.
 #include "hard_case_util.h"

@@ -1,5 +1,5 @@
 // The body form of the compliance and the unbuilt solve (build_lcp = false,
-// core/body_compliance.h, BodyAccess in gauss_seidel.cpp): W λ without W equals the
+// core/body_compliance.h, BodyAccess in kernels/sweep_access.h): W λ without W equals the
 // assembled W λ; the unbuilt Gauss-Seidel gives the forces of the built solve (dense and
 // block-sparse W) for frictional, frictionless and bilateral contacts, with warm start,
 // minW, maxF, regularization, softness, sor and the SOFA stopping rule; the other solvers

@@ -11,7 +11,7 @@
 //
 // Storage grows with bodies + contacts, not with contacts²; W λ costs O(rows) through
 // per-body accumulators u_b = C_b Σ J_bᵀ λ (bodyResponse), which is what the unbuilt
-// Gauss-Seidel (gauss_seidel.cpp) maintains. `assemble` builds the block-sparse W (one
+// Gauss-Seidel (kernels/sweep_access.h) maintains. `assemble` builds the block-sparse W (one
 // block per pair of contacts sharing a body) for every other solver.
 #pragma once
 

@@ -9,7 +9,7 @@
 namespace lcp_contact_solver::core {
 
 enum class SolverKind {
-  kAuto,       // the portfolio (contact_solver.cpp, docs/ARCHITECTURE.md): starts with the
+  kAuto,       // the portfolio (portfolio.cpp, docs/ARCHITECTURE.md): starts with the
                // member the problem's features predict, watches its progress in slices and
                // continues from the best iterate with the next member when it stalls or fails.
                // maxIt and time_budget bound the whole portfolio; SolveResult::solver reports
