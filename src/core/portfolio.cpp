@@ -134,17 +134,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
   if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
-    const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W);
-    const Eigen::MatrixXd W = dense ? Eigen::MatrixXd() : toDense(ctx.problem->W);
-    const Eigen::MatrixXd& M = dense ? *dense : W;
-    const double tol = 1e-12 * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
-    f.symmetric = true;
-    for (Eigen::Index j = 0; j < M.cols() && f.symmetric; ++j)
-      for (Eigen::Index i = j + 1; i < M.rows(); ++i)
-        if (std::abs(M(i, j) - M(j, i)) > tol) {
-          f.symmetric = false;
-          break;
-        }
+    f.symmetric = isSymmetric(ctx.problem->W, 1e-12);
   }
   if (body_dof > 0) {
     int active_rows = 0;

@@ -134,6 +134,39 @@ int complianceCols(const ComplianceMatrix& W) {
   return std::get<BlockSparseMatrix>(W).rows();
 }
 
+bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance) {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
+    const double tol = relative_tolerance * std::max(dense->cwiseAbs().maxCoeff(), 1e-300);
+    for (Eigen::Index j = 0; j < dense->cols(); ++j)
+      for (Eigen::Index i = j + 1; i < dense->rows(); ++i)
+        if (std::abs((*dense)(i, j) - (*dense)(j, i)) > tol) return false;
+    return true;
+  }
+  const auto& B = std::get<BlockSparseMatrix>(W);
+  double largest = 1e-300;
+  for (double v : B.values) largest = std::max(largest, std::abs(v));
+  const double tol = relative_tolerance * largest;
+  // Each stored block (i, j) against its mirror (j, i), found in block row j; a block whose
+  // mirror is not stored must be zero to within tol.
+  for (int bi = 0; bi < B.blockCount(); ++bi) {
+    const int rows = B.block_offset[bi + 1] - B.block_offset[bi];
+    for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
+      const int bj = B.block_col[s];
+      const int cols = B.block_offset[bj + 1] - B.block_offset[bj];
+      const double* v = B.values.data() + B.value_start[s];
+      const double* mirror = nullptr;
+      for (int t = B.row_start[bj]; t < B.row_start[bj + 1] && mirror == nullptr; ++t)
+        if (B.block_col[t] == bi) mirror = B.values.data() + B.value_start[t];
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          const double m = mirror != nullptr ? mirror[c * rows + r] : 0.0;  // mirror is cols × rows
+          if (std::abs(v[r * cols + c] - m) > tol) return false;
+        }
+    }
+  }
+  return true;
+}
+
 Eigen::MatrixXd toDense(const ComplianceMatrix& W) {
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) return *dense;
   return std::get<BlockSparseMatrix>(W).toDense();

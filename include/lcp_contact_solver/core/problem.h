@@ -98,6 +98,8 @@ using ComplianceMatrix = std::variant<Eigen::MatrixXd, BlockSparseMatrix>;
 int complianceRows(const ComplianceMatrix& W);
 int complianceCols(const ComplianceMatrix& W);
 Eigen::MatrixXd toDense(const ComplianceMatrix& W);
+// W = Wᵀ to within relative_tolerance × max |W_ij|, read in W's own storage (no dense copy).
+bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance);
 // y = W x
 void multiply(const ComplianceMatrix& W, const Eigen::VectorXd& x, Eigen::VectorXd& y);
 // Diagonal block of contact rows [offset, offset + n).
