@@ -1,6 +1,6 @@
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include "lcp_contact_solver/ros/replay/text.h"
 
 #include <ros/message_traits.h>

@@ -1,7 +1,7 @@
 #include "lcp_contact_solver/ros/sim/mujoco_bridge_node.h"
 
 #include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <diagnostic_msgs/KeyValue.h>
 

@@ -1,6 +1,6 @@
 #include "lcp_contact_solver/ros/sim/scene_simulator_node.h"
 
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/scene/scene.h"
 
 #include <lcp_contact_solver/Compliance.h>

@@ -8,7 +8,7 @@
 #pragma once
 
 #include "lcp_contact_solver/core/solver_params.h"
-#include "lcp_contact_solver/ros/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/replay/answer_check.h"
 #include "lcp_contact_solver/ros/replay/force_comparison.h"
 #include "lcp_contact_solver/ros/replay/stamp_pairer.h"

@@ -1,8 +1,8 @@
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/msg_primitives.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_primitives.h"
 
 #include <Eigen/Geometry>
 
