@@ -2,6 +2,7 @@
 
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/scene/mujoco_comparison.h"
 
 #include <diagnostic_msgs/KeyValue.h>
 

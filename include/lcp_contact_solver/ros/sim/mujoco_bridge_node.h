@@ -26,6 +26,7 @@
 // to MuJoCo's own solver for the step; both are counted and warned about.
 #pragma once
 
+#include "lcp_contact_solver/core/solve_result.h"
 #include "lcp_contact_solver/ros/sim/solver_link.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
