@@ -85,27 +85,25 @@ const char* const kStateNames[lcs::core::kContactStateCount] = {"open", "stick",
 }  // namespace
 
 std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
-  const std::string link_error = loadLinkSettings(pnh, s);
-  if (!link_error.empty()) return link_error;
-  for (const std::string& error : {
-           readParam(pnh, "model", &s->model, "a string"), readParam(pnh, "mode", &s->mode, "a string"),
-           readParam(pnh, "cone", &s->cone, "a string"),
-           readParam(pnh, "mujoco_solver", &s->mujoco_solver, "a string"),
-           readParam(pnh, "mujoco_iterations", &s->mujoco_iterations, "an integer"),
-           readParam(pnh, "mujoco_tolerance", &s->mujoco_tolerance, "a number"),
-           readParam(pnh, "compare", &s->compare, "true or false"),
-           readParam(pnh, "reference", &s->reference, "true or false"),
-           readParam(pnh, "steps", &s->steps, "an integer"), readParam(pnh, "dt", &s->dt, "a number"),
-           readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
-           readParam(pnh, "include_limits", &s->include_limits, "true or false"),
-           readParam(pnh, "include_equalities", &s->include_equalities, "true or false"),
-           readParam(pnh, "storage", &s->storage, "a string"),
-           readParam(pnh, "dense_max_rows", &s->dense_max_rows, "an integer"),
-           readParam(pnh, "max_rel_warn", &s->max_rel_warn, "a number"),
-           readParam(pnh, "print_summary", &s->print_summary, "true or false")}) {
-    if (!error.empty()) return error;
-  }
-  return validate(*s);
+  return loadSettings(pnh, s,
+                      {{"model", &s->model},
+                       {"mode", &s->mode},
+                       {"cone", &s->cone},
+                       {"mujoco_solver", &s->mujoco_solver},
+                       {"mujoco_iterations", &s->mujoco_iterations},
+                       {"mujoco_tolerance", &s->mujoco_tolerance},
+                       {"compare", &s->compare},
+                       {"reference", &s->reference},
+                       {"steps", &s->steps},
+                       {"dt", &s->dt},
+                       {"min_report_subscribers", &s->min_report_subscribers},
+                       {"include_limits", &s->include_limits},
+                       {"include_equalities", &s->include_equalities},
+                       {"storage", &s->storage},
+                       {"dense_max_rows", &s->dense_max_rows},
+                       {"max_rel_warn", &s->max_rel_warn},
+                       {"print_summary", &s->print_summary}},
+                      [s] { return validate(*s); });
 }
 
 // ---- messages -------------------------------------------------------------------------------
