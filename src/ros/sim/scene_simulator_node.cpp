@@ -69,13 +69,9 @@ scene::Scene loadScene(const SimulatorSettings& settings) {
 
 std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings* s) {
   return loadSettings(pnh, s,
-                      {{"scene", &s->scene},
-                       {"scene_dir", &s->scene_dir},
-                       {"dt", &s->dt},
-                       {"marker_period", &s->marker_period},
-                       {"min_subscribers", &s->min_subscribers},
-                       {"print_status", &s->print_status},
-                       {"rest_linear_velocity", &s->rest_linear_velocity},
+                      {{"scene", &s->scene}, {"scene_dir", &s->scene_dir}, {"dt", &s->dt},
+                       {"marker_period", &s->marker_period}, {"min_subscribers", &s->min_subscribers},
+                       {"print_status", &s->print_status}, {"rest_linear_velocity", &s->rest_linear_velocity},
                        {"rest_angular_velocity", &s->rest_angular_velocity}},
                       [s] { return validate(*s); });
 }

@@ -42,13 +42,10 @@ std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamFi
 }
 
 std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* s) {
-  const std::string error = readParams(pnh, {{"duration", &s->duration},
-                                             {"rate_factor", &s->rate_factor},
+  const std::string error = readParams(pnh, {{"duration", &s->duration}, {"rate_factor", &s->rate_factor},
                                              {"force_timeout", &s->force_timeout},
-                                             {"wait_for_solver", &s->wait_for_solver},
-                                             {"linger", &s->linger},
-                                             {"frame_id", &s->frame_id},
-                                             {"publish_clock", &s->publish_clock},
+                                             {"wait_for_solver", &s->wait_for_solver}, {"linger", &s->linger},
+                                             {"frame_id", &s->frame_id}, {"publish_clock", &s->publish_clock},
                                              {"status_period", &s->status_period}});
   return error.empty() ? validateLinkSettings(*s) : error;
 }
