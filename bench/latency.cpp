@@ -32,10 +32,10 @@
 
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/ros/cycle_solver.h"
-#include "lcp_contact_solver/ros/markers.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/markers.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ConstraintForces.h>

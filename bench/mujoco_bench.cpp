@@ -30,7 +30,7 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/kernels/scalar_rows.h"
-#include "lcp_contact_solver/scene/mujoco_adapter.h"
+#include "lcp_contact_solver/scene/mujoco_comparison.h"
 
 #include <algorithm>
 #include <chrono>

@@ -10,7 +10,7 @@
 // the simulated time, on /contacts and /compliance. Prints contacts and rows per step.
 #include "scene_problems.h"
 
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
 #include <CLI/CLI.hpp>

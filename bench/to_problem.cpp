@@ -4,7 +4,7 @@
 // validateProblem and without it (validate=false: what CycleSolver calls, the core's solve
 // runs the same check).
 //   to_problem_bench
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include <chrono>
 #include <cstdio>
 namespace lcs = lcp_contact_solver;

@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/contact_solver_node.h"
+#include "lcp_contact_solver/ros/node/contact_solver_node.h"
 
 #include <stdexcept>
 

@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
+#include <variant>
 
 namespace lcp_contact_solver {
 namespace scene {
@@ -110,6 +112,9 @@ std::string validateSceneParams(const SceneParams& p) {
 
 namespace {
 
+// Where the value of a key of one value goes.
+using PlainField = std::variant<double*, bool*, std::string*, Eigen::Vector3d*>;
+
 class Reader {
  public:
   explicit Reader(std::string source) : source_(std::move(source)) {}
@@ -160,136 +165,166 @@ class Reader {
       }
     }
   }
+  // Each item of the list `n` (else "expected a list of <what>"), with its key "key[i]".
+  template <typename F>
+  void forEachItem(const YAML::Node& n, const std::string& key, const std::string& what, F&& f) const {
+    if (!n.IsSequence()) fail(key, "expected a list of " + what);
+    for (std::size_t i = 0; i < n.size(); ++i) f(n[i], key + "[" + std::to_string(i) + "]");
+  }
+  // Each entry of the map `n`: its name, its value (a map of `allowed` keys only) and its key
+  // "key.name".
+  template <typename F>
+  void forEachEntry(const YAML::Node& n, const std::string& key, const std::set<std::string>& allowed, F&& f) const {
+    map(n, key);
+    for (const auto& entry : n) {
+      const std::string name = entry.first.Scalar();
+      const std::string k = key + "." + name;
+      map(entry.second, k);
+      onlyKeys(entry.second, k, allowed);
+      f(name, entry.second, k);
+    }
+  }
+  // A key of one value into its field, read as the field's type.
+  void read(const YAML::Node& n, const std::string& key, const PlainField& field) const {
+    switch (field.index()) {
+      case 0: *std::get<double*>(field) = number(n, key); break;
+      case 1: *std::get<bool*>(field) = boolean(n, key); break;
+      case 2: *std::get<std::string*>(field) = string(n, key); break;
+      default: *std::get<Eigen::Vector3d*>(field) = vec3(n, key); break;
+    }
+  }
 
  private:
   std::string source_;
 };
 
+// The keys of one value each.
+std::map<std::string, PlainField> plainFields(SceneParams* p) {
+  return {{"description", &p->description},
+          {"dt", &p->dt},
+          {"gravity", &p->gravity},
+          {"erp", &p->erp},
+          {"softness", &p->softness},
+          {"mu", &p->mu},
+          {"torsional_friction", &p->torsional_friction},
+          {"rolling_friction", &p->rolling_friction},
+          {"restitution", &p->restitution},
+          {"restitution_threshold", &p->restitution_threshold},
+          {"contact_margin", &p->contact_margin},
+          {"id_match_tolerance", &p->id_match_tolerance},
+          {"duration", &p->duration},
+          {"gyroscopic", &p->gyroscopic}};
+}
+
+// ---- the keys with structure: one reader each -------------------------------------------
+
+void readCompliance(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  if (!parseComplianceStorage(r.string(v, key), &p->compliance))
+    r.fail(key, "expected dense, block_sparse or bodies, got '" + v.Scalar() + "'");
+}
+
+void readRestitutionPairs(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.forEachItem(v, key, "[body_a, body_b, restitution]", [&](const YAML::Node& item, const std::string& k) {
+    if (!item.IsSequence() || item.size() != 3) r.fail(k, "expected [body_a, body_b, restitution]");
+    p->restitution_pairs.push_back({r.string(item[0], k), r.string(item[1], k), r.number(item[2], k)});
+  });
+}
+
+void readFrictionPairs(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.forEachItem(v, key, "[body_a, body_b, mu(, torsional, rolling)]", [&](const YAML::Node& item, const std::string& k) {
+    if (!item.IsSequence() || (item.size() != 3 && item.size() != 5))
+      r.fail(k, "expected [body_a, body_b, mu] or [body_a, body_b, mu, torsional, rolling]");
+    PairFriction f{r.string(item[0], k), r.string(item[1], k), r.number(item[2], k)};
+    if (item.size() == 5) {
+      f.torsional = r.number(item[3], k);
+      f.rolling = r.number(item[4], k);
+      if (f.torsional < 0.0 || f.rolling < 0.0) r.fail(k, "torsional and rolling must be >= 0 (m)");
+    }
+    p->friction_pairs.push_back(f);
+  });
+}
+
+void readDisableCollisions(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.forEachItem(v, key, "[body_a, body_b]", [&](const YAML::Node& item, const std::string& k) {
+    if (!item.IsSequence() || item.size() != 2) r.fail(k, "expected [body_a, body_b]");
+    p->disable_collisions.emplace_back(r.string(item[0], k), r.string(item[1], k));
+  });
+}
+
+void readGroundPlane(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.map(v, key);
+  r.onlyKeys(v, key, {"enabled", "height", "half_extent", "thickness"});
+  p->ground_plane.enabled = true;  // giving the map enables it unless enabled: false
+  if (v["enabled"]) p->ground_plane.enabled = r.boolean(v["enabled"], key + ".enabled");
+  if (v["height"]) p->ground_plane.height = r.number(v["height"], key + ".height");
+  if (v["half_extent"]) p->ground_plane.half_extent = r.number(v["half_extent"], key + ".half_extent");
+  if (v["thickness"]) p->ground_plane.thickness = r.number(v["thickness"], key + ".thickness");
+}
+
+void readJointOrigins(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.forEachEntry(v, key, {"xyz", "rpy", "rpy_deg"}, [&](const std::string& name, const YAML::Node& j, const std::string& k) {
+    JointOriginOverride o;
+    if (j["xyz"]) { o.has_xyz = true; o.xyz = r.vec3(j["xyz"], k + ".xyz"); }
+    if (j["rpy"] && j["rpy_deg"]) r.fail(k, "give rpy or rpy_deg, not both");
+    if (j["rpy"]) { o.has_rpy = true; o.rpy = r.vec3(j["rpy"], k + ".rpy"); }
+    if (j["rpy_deg"]) {
+      o.has_rpy = true;
+      o.rpy = r.vec3(j["rpy_deg"], k + ".rpy_deg") * (M_PI / 180.0);
+    }
+    p->joint_origins[name] = o;
+  });
+}
+
+void readInitialVelocities(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.forEachEntry(v, key, {"linear", "angular"}, [&](const std::string& name, const YAML::Node& b, const std::string& k) {
+    InitialVelocity iv;
+    if (b["linear"]) iv.linear = r.vec3(b["linear"], k + ".linear");
+    if (b["angular"]) iv.angular = r.vec3(b["angular"], k + ".angular");
+    p->initial_velocities[name] = iv;
+  });
+}
+
+void readSolver(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
+  r.map(v, key);
+  for (const auto& kv2 : v) {
+    // `name` is the solver's name here (the ROS parameter is `solver`).
+    const std::string k = kv2.first.Scalar(), param = k == "name" ? "solver" : k;
+    if (k == "solver" || core::findSolverParam(param) == nullptr) {
+      std::string list = "name";
+      for (const core::ParamSpec& spec : core::solverParamSpecs())
+        if (spec.name != "solver") list += ", " + spec.name;
+      r.fail(key + "." + k, "unknown key (known: " + list + ")");
+    }
+    if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + core::expectedValue(*core::findSolverParam(param)));
+    if (const std::string error = core::setParam(&p->solver, param, kv2.second.Scalar()); !error.empty())
+      r.fail(key + "." + k, error);
+  }
+}
+
+using SectionReader = void (*)(const Reader&, const YAML::Node&, const std::string&, SceneParams*);
+const std::map<std::string, SectionReader> kSections = {{"compliance", readCompliance},
+                                                        {"restitution_pairs", readRestitutionPairs},
+                                                        {"friction_pairs", readFrictionPairs},
+                                                        {"disable_collisions", readDisableCollisions},
+                                                        {"ground_plane", readGroundPlane},
+                                                        {"joint_origins", readJointOrigins},
+                                                        {"initial_velocities", readInitialVelocities},
+                                                        {"solver", readSolver}};
+
 SceneParams parseNode(const YAML::Node& root, const std::string& source) {
   Reader r(source);
   SceneParams p;
   if (!root || root.IsNull()) return p;
+  const std::map<std::string, PlainField> fields = plainFields(&p);
+  std::set<std::string> known;
+  for (const auto& field : fields) known.insert(field.first);
+  for (const auto& section : kSections) known.insert(section.first);
   r.map(root, "");
-  r.onlyKeys(root, "",
-             {"description", "dt", "gravity", "erp", "softness", "mu", "friction_pairs", "disable_collisions",
-              "torsional_friction", "rolling_friction", "restitution", "restitution_threshold", "restitution_pairs",
-              "contact_margin", "id_match_tolerance", "compliance", "gyroscopic", "ground_plane",
-              "joint_origins", "initial_velocities", "solver", "duration"});
+  r.onlyKeys(root, "", known);
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
-    const YAML::Node& v = kv.second;
-    if (key == "description") {
-      p.description = r.string(v, key);
-    } else if (key == "dt") {
-      p.dt = r.number(v, key);
-    } else if (key == "gravity") {
-      p.gravity = r.vec3(v, key);
-    } else if (key == "erp") {
-      p.erp = r.number(v, key);
-    } else if (key == "softness") {
-      p.softness = r.number(v, key);
-    } else if (key == "torsional_friction") {
-      p.torsional_friction = r.number(v, key);
-    } else if (key == "rolling_friction") {
-      p.rolling_friction = r.number(v, key);
-    } else if (key == "restitution") {
-      p.restitution = r.number(v, key);
-    } else if (key == "restitution_threshold") {
-      p.restitution_threshold = r.number(v, key);
-    } else if (key == "restitution_pairs") {
-      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b, restitution]");
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        const std::string k = key + "[" + std::to_string(i) + "]";
-        if (!v[i].IsSequence() || v[i].size() != 3) r.fail(k, "expected [body_a, body_b, restitution]");
-        p.restitution_pairs.push_back({r.string(v[i][0], k), r.string(v[i][1], k), r.number(v[i][2], k)});
-      }
-    } else if (key == "mu") {
-      p.mu = r.number(v, key);
-    } else if (key == "contact_margin") {
-      p.contact_margin = r.number(v, key);
-    } else if (key == "id_match_tolerance") {
-      p.id_match_tolerance = r.number(v, key);
-    } else if (key == "duration") {
-      p.duration = r.number(v, key);
-    } else if (key == "gyroscopic") {
-      p.gyroscopic = r.boolean(v, key);
-    } else if (key == "compliance") {
-      if (!parseComplianceStorage(r.string(v, key), &p.compliance))
-        r.fail(key, "expected dense, block_sparse or bodies, got '" + v.Scalar() + "'");
-    } else if (key == "friction_pairs") {
-      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b, mu(, torsional, rolling)]");
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        const std::string k = key + "[" + std::to_string(i) + "]";
-        if (!v[i].IsSequence() || (v[i].size() != 3 && v[i].size() != 5))
-          r.fail(k, "expected [body_a, body_b, mu] or [body_a, body_b, mu, torsional, rolling]");
-        PairFriction f{r.string(v[i][0], k), r.string(v[i][1], k), r.number(v[i][2], k)};
-        if (v[i].size() == 5) {
-          f.torsional = r.number(v[i][3], k);
-          f.rolling = r.number(v[i][4], k);
-          if (f.torsional < 0.0 || f.rolling < 0.0) r.fail(k, "torsional and rolling must be >= 0 (m)");
-        }
-        p.friction_pairs.push_back(f);
-      }
-    } else if (key == "disable_collisions") {
-      if (!v.IsSequence()) r.fail(key, "expected a list of [body_a, body_b]");
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        const std::string k = key + "[" + std::to_string(i) + "]";
-        if (!v[i].IsSequence() || v[i].size() != 2) r.fail(k, "expected [body_a, body_b]");
-        p.disable_collisions.emplace_back(r.string(v[i][0], k), r.string(v[i][1], k));
-      }
-    } else if (key == "ground_plane") {
-      r.map(v, key);
-      r.onlyKeys(v, key, {"enabled", "height", "half_extent", "thickness"});
-      p.ground_plane.enabled = true;  // giving the map enables it unless enabled: false
-      if (v["enabled"]) p.ground_plane.enabled = r.boolean(v["enabled"], key + ".enabled");
-      if (v["height"]) p.ground_plane.height = r.number(v["height"], key + ".height");
-      if (v["half_extent"]) p.ground_plane.half_extent = r.number(v["half_extent"], key + ".half_extent");
-      if (v["thickness"]) p.ground_plane.thickness = r.number(v["thickness"], key + ".thickness");
-    } else if (key == "joint_origins") {
-      r.map(v, key);
-      for (const auto& j : v) {
-        const std::string name = j.first.Scalar();
-        const std::string k = key + "." + name;
-        r.map(j.second, k);
-        r.onlyKeys(j.second, k, {"xyz", "rpy", "rpy_deg"});
-        JointOriginOverride o;
-        if (j.second["xyz"]) { o.has_xyz = true; o.xyz = r.vec3(j.second["xyz"], k + ".xyz"); }
-        if (j.second["rpy"] && j.second["rpy_deg"]) r.fail(k, "give rpy or rpy_deg, not both");
-        if (j.second["rpy"]) { o.has_rpy = true; o.rpy = r.vec3(j.second["rpy"], k + ".rpy"); }
-        if (j.second["rpy_deg"]) {
-          o.has_rpy = true;
-          o.rpy = r.vec3(j.second["rpy_deg"], k + ".rpy_deg") * (M_PI / 180.0);
-        }
-        p.joint_origins[name] = o;
-      }
-    } else if (key == "initial_velocities") {
-      r.map(v, key);
-      for (const auto& b : v) {
-        const std::string name = b.first.Scalar();
-        const std::string k = key + "." + name;
-        r.map(b.second, k);
-        r.onlyKeys(b.second, k, {"linear", "angular"});
-        InitialVelocity iv;
-        if (b.second["linear"]) iv.linear = r.vec3(b.second["linear"], k + ".linear");
-        if (b.second["angular"]) iv.angular = r.vec3(b.second["angular"], k + ".angular");
-        p.initial_velocities[name] = iv;
-      }
-    } else if (key == "solver") {
-      r.map(v, key);
-      for (const auto& kv2 : v) {
-        // `name` is the solver's name here (the ROS parameter is `solver`).
-        const std::string k = kv2.first.Scalar(), param = k == "name" ? "solver" : k;
-        if (k == "solver" || core::findSolverParam(param) == nullptr) {
-          std::string list = "name";
-          for (const core::ParamSpec& spec : core::solverParamSpecs())
-            if (spec.name != "solver") list += ", " + spec.name;
-          r.fail(key + "." + k, "unknown key (known: " + list + ")");
-        }
-        if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + core::expectedValue(*core::findSolverParam(param)));
-        if (const std::string error = core::setParam(&p.solver, param, kv2.second.Scalar()); !error.empty())
-          r.fail(key + "." + k, error);
-      }
-    }
+    if (const auto field = fields.find(key); field != fields.end()) r.read(kv.second, key, field->second);
+    else kSections.at(key)(r, kv.second, key, &p);
   }
   if (std::string err = validateSceneParams(p); !err.empty()) throw SceneError(source + ": " + err);
   return p;

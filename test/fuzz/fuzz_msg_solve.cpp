@@ -15,9 +15,9 @@
 #include "fuzz_input.h"
 #include "fuzz_targets.h"
 
-#include "lcp_contact_solver/ros/cycle_solver.h"
-#include "lcp_contact_solver/ros/markers.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/markers.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <cstdlib>
 #include <exception>

@@ -12,8 +12,8 @@
 //     on any topic the node writes (forces, stats, markers) during the whole test;
 //   - the node then solves the next good message correctly (forces = a direct core solve).
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <gtest/gtest.h>

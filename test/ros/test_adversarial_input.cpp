@@ -4,11 +4,11 @@
 // a good bag, a message whose array length runs past its end, one whose length claims
 // terabytes, a topic of the wrong type, bytes flipped in a compressed chunk): a clear
 // one-line error or rejected cycles, exit status 2 for an unreadable bag, never a crash.
-#include "lcp_contact_solver/ros/cycle_solver.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "replay/replay_command.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <gtest/gtest.h>

@@ -3,9 +3,9 @@
 // solve of the same problem.
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/markers.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/markers.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <diagnostic_msgs/DiagnosticArray.h>

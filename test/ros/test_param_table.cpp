@@ -1,10 +1,10 @@
-// The parameter tables (core/solver_param_table.def, ros/node_param_table.def) against
+// The parameter tables (core/solver_param_table.def, ros/node/node_param_table.def) against
 // everything that names the parameters: SolverParams' and NodeSettings' defaults, the core's
 // enum names, config/default.yaml, the generated dynamic_reconfigure config (from
 // cfg/ContactSolver.cfg), the service overrides and the README's Parameters section.
 #include "lcp_contact_solver/core/solver_param_table.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -26,7 +26,7 @@ namespace {
 
 using Config = lcp_contact_solver::ContactSolverConfig;
 
-// The node's own table (ros/node_param_table.def), as data for the checks below.
+// The node's own table (ros/node/node_param_table.def), as data for the checks below.
 struct NodeSpec {
   std::string name, type;  // type: double, int, bool, vec3, enum
   bool in_config;           // group SOFA or NODE
@@ -55,7 +55,7 @@ std::vector<NodeSpec> nodeSpecs() {
                      axisDoc(doc, "xyz"[i]), numberText(s.member[i])});
 #define LCS_NODE_ENUM(name, member, d, group, doc) \
   specs.push_back({#name, "enum", group, 0.0, 0.0, 0.0, d, doc, lcp_contact_solver_ros::overloadPolicyName(s.member)});
-#include "lcp_contact_solver/ros/node_param_table.def"
+#include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
 #undef LCS_NODE_BOOL

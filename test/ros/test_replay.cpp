@@ -8,12 +8,12 @@
 //     problem (answer_check.h: residual, states, signs, friction cone).
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/core/solver_param_table.h"
-#include "lcp_contact_solver/ros/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/replay/answer_check.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "replay/replay_command.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <gtest/gtest.h>

@@ -7,7 +7,7 @@
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "replay/summary.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <gtest/gtest.h>
 #include <lcp_contact_solver/Compliance.h>

@@ -3,7 +3,7 @@
 // bilateral one, 9 rows coupled through a symmetric positive definite W.
 #pragma once
 
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ContactArray.h>

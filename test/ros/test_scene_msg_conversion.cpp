@@ -2,8 +2,8 @@
 // ContactArray + Compliance and the solver node's own reader (toProblem) unchanged, and
 // forces come back by contact id.
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/scene/scene.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 

@@ -4,9 +4,9 @@
 //   - every step with contacts got its forces (no timeouts, no failures);
 //   - resting bodies carry their weight: net contact force = m·g within 1 %;
 //   - the trajectory through the node equals the in-process one (poses and λ within 1e-9).
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/ros/sim/scene_simulator_node.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "lcp_contact_solver/scene/scene.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 

@@ -11,7 +11,7 @@
 //    are reported per contact state (not asserted), and driving MuJoCo with our Coulomb
 //    forces must stay stable (no penetration growth, no energy gain at rest).
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/scene/mujoco_adapter.h"
+#include "lcp_contact_solver/scene/mujoco_comparison.h"
 
 #include <gtest/gtest.h>
 

@@ -51,104 +51,23 @@
 // an entry with body_a = the joint's body, body_b = its parent, position = the joint
 // anchor and normal = the joint axis times the sign of the row (a generalized force: N·m for
 // a hinge); an equality is an entry between its two bodies at body_a's origin.
+//
+// The model and its step: mujoco_world.h; comparisons of forces: mujoco_comparison.h.
 #pragma once
 
 #include "lcp_contact_solver/core/problem.h"
-#include "lcp_contact_solver/core/solve_result.h"
+#include "lcp_contact_solver/scene/mujoco_world.h"
 
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Core>
 
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
 
 namespace lcp_contact_solver {
 namespace scene {
-
-// ---- model, options ----------------------------------------------------------------------
-
-// Overrides of the model's mjOption, applied after loading. Empty / negative = keep the model's.
-struct MujocoOptions {
-  std::string cone;      // "pyramidal" or "elliptic"
-  std::string solver;    // MuJoCo's own solver: "pgs", "cg" or "newton"
-  std::string jacobian;  // "dense", "sparse" or "auto"
-  int iterations = -1;   // MuJoCo's solver iterations
-  double tolerance = -1; // MuJoCo's solver tolerance (0: run every iteration)
-  double timestep = -1;  // s
-};
-
-// Parses the names above ("" keeps the model's). False with a sentence for an unknown one.
-bool parseMujocoCone(const std::string& name, int* cone, std::string* error);
-bool parseMujocoSolver(const std::string& name, int* solver, std::string* error);
-bool parseMujocoJacobian(const std::string& name, int* jacobian, std::string* error);
-const char* mujocoConeName(int cone);
-const char* mujocoSolverName(int solver);
-
-// An mjModel and its mjData, freed together.
-class MujocoWorld {
- public:
-  // Loads an MJCF (or MJB) file and applies the option overrides; nullptr with a sentence in
-  // `error` when the file does not load or an override is invalid.
-  static std::unique_ptr<MujocoWorld> load(const std::string& path, const MujocoOptions& options,
-                                           std::string* error);
-  ~MujocoWorld();
-  MujocoWorld(const MujocoWorld&) = delete;
-  MujocoWorld& operator=(const MujocoWorld&) = delete;
-
-  mjModel* model() const { return model_; }
-  mjData* data() const { return data_; }
-  const std::string& path() const { return path_; }
-
-  // Copies the full state and the step's data of `other` (same model) into this world.
-  void copyDataFrom(const MujocoWorld& other);
-  // A second world on the same file and options, with this one's data copied.
-  std::unique_ptr<MujocoWorld> clone() const;
-
-  // Body name (or "body<N>"; body 0 is "world").
-  std::string bodyName(int body) const;
-
- private:
-  MujocoWorld() = default;
-  mjModel* model_ = nullptr;
-  mjData* data_ = nullptr;
-  std::string path_;
-  MujocoOptions options_;
-};
-
-// ---- the step --------------------------------------------------------------------------
-
-// Runs MuJoCo's forward pipeline on the current state up to its constraint problem (the
-// sequence of mj_step: MuJoCo's position/velocity checks, then positions (collisions,
-// constraints, efc_J, efc_R) and their sensors, velocities (efc_aref) and theirs, actuation,
-// smooth accelerations (qacc_smooth) and efc_b = J qacc_smooth − aref; computes efc_AR also
-// when the model's solver is primal (CG, Newton do not need it). With `run_solver` MuJoCo's
-// own solver runs too (mj_fwdConstraint: efc_force, qfrc_constraint, qacc — together this
-// is mj_forward without the acceleration sensors), and its wall time is returned through
-// `solver_seconds` (may be null).
-void forwardToConstraints(mjModel* m, mjData* d, bool run_solver, double* solver_seconds = nullptr);
-
-// Computes efc_AR for the current constraints whatever the model's solver (MuJoCo 2.2 fills
-// it only for its dual solver, PGS). Returns its wall time in s.
-double computeConstraintAR(mjModel* m, mjData* d);
-
-// Constraint forces of every MuJoCo row (nefc) → qfrc_constraint = Jᵀ f and
-// qacc = qacc_smooth + M⁻¹ Jᵀ f, replacing what MuJoCo's solver left (efc_force too).
-void applyConstraintForces(const mjModel* m, mjData* d, const Eigen::VectorXd& efc_force);
-
-// Finishes the step from d->qacc as mj_step does: acceleration sensors, MuJoCo's check of
-// qacc, then semi-implicit Euler (mj_Euler, with its implicit joint damping). Empty string,
-// or why not (only the Euler integrator is supported: RK4 re-evaluates the dynamics at
-// substeps, which would bypass the forces).
-std::string integrateEuler(const mjModel* m, mjData* d);
-
-// Kinetic + potential energy (gravity, springs) of the current state after the position
-// stage, J (MuJoCo's mj_energyPos + mj_energyVel, with its energy flag set for the call).
-double totalEnergy(mjModel* m, mjData* d);
-// Deepest penetration over the active contacts (−min dist, 0 when none penetrates), m.
-double maxPenetration(const mjData* d);
 
 // ---- the problem ------------------------------------------------------------------------
 
@@ -225,33 +144,6 @@ std::int64_t mujocoEqualityId(int equality);
 // rows gives an empty problem (no contacts).
 std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtractOptions& options,
                            MujocoProblem* out);
-
-// The contact force of entry `i` as MuJoCo's mj_contactForce reports it for a contact, in
-// its contact frame (normal, t1, t2) from problem forces λ: an edge contributes its share
-// (f n ± μ f t_j); for cross-checks of the row mapping.
-Eigen::Vector3d contactFrameForce(const MujocoProblem& problem, const Eigen::VectorXd& lambda, int mj_contact,
-                                  const mjData* d);
-
-// ---- comparison -------------------------------------------------------------------------
-
-// Our forces against MuJoCo's for the same step, in MuJoCo's units (efc_force): max_abs =
-// max over kept rows |f_ours − f_mujoco|, max_rel = max_abs / max |f_mujoco| (the step's
-// scale). Per contact state of our solution (open, stick, slip, ignored) the same figures.
-struct ForceComparison {
-  int rows = 0;
-  double max_abs = 0.0;
-  double max_rel = 0.0;
-  double scale = 0.0;  // max |f_mujoco| (1 when all are zero)
-  // Indexed by ContactState: entries and the max abs difference among their rows.
-  int state_count[core::kContactStateCount] = {};
-  double state_max_abs[core::kContactStateCount] = {};
-};
-ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorXd& lambda,
-                              const std::vector<core::ContactState>& states = {});
-
-// The package's solver-independent residual (residual.h) of problem forces λ, e.g.
-// MuJoCo's own (mujoco_lambda), so every solver is measured the same way.
-double problemResidual(const MujocoProblem& problem, const Eigen::VectorXd& lambda);
 
 }  // namespace scene
 }  // namespace lcp_contact_solver

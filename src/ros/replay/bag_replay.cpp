@@ -1,17 +1,17 @@
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/replay/bag_topics.h"
+#include "lcp_contact_solver/ros/replay/stats_csv.h"
 #include "lcp_contact_solver/ros/replay/text.h"
 
-#include <ros/message_traits.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <exception>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <set>
 
@@ -28,104 +28,6 @@ constexpr const char* kDefaultContacts = "contacts";
 constexpr const char* kDefaultCompliance = "compliance";
 constexpr const char* kDefaultForces = "constraint_forces";
 constexpr const char* kDefaultStats = "contact_solver/stats";
-
-// ---- topics ----------------------------------------------------------------------------
-
-template <typename M>
-struct TopicChoice {
-  static const char* type() { return ros::message_traits::DataType<M>::value(); }
-  static const char* md5() { return ros::message_traits::MD5Sum<M>::value(); }
-};
-
-std::string joined(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
-}
-
-// Finds the topic of type M: `requested` (exact, leading '/' optional), else the default
-// name, else the only topic of that type. "" when there is none and it is optional.
-// `exclude` (may be empty) is never chosen by name or type.
-template <typename M>
-std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& requested,
-                        const std::string& default_name, const std::string& option, bool required,
-                        std::vector<std::string>* notes, std::string* error, const std::string& exclude = "") {
-  const std::string type = TopicChoice<M>::type();
-  std::set<std::string> all_topics, typed_topics;
-  for (const rosbag::ConnectionInfo* c : connections) {
-    all_topics.insert(c->topic);
-    if (c->datatype == type && c->topic != exclude) typed_topics.insert(c->topic);
-  }
-  auto check = [&](const std::string& topic) -> std::string {
-    for (const rosbag::ConnectionInfo* c : connections) {
-      if (c->topic != topic) continue;
-      if (c->datatype != type) {
-        *error = "topic " + topic + " holds " + c->datatype + ", not " + type;
-        return "";
-      }
-      if (c->md5sum != TopicChoice<M>::md5()) {
-        *error = "topic " + topic + " was recorded with another definition of " + type + " (md5 " + c->md5sum +
-                 ", this build has " + TopicChoice<M>::md5() + ")";
-        return "";
-      }
-    }
-    return topic;
-  };
-  const std::string wanted = normalizeTopic(requested.empty() ? default_name : requested);
-  for (const std::string& topic : all_topics)
-    if (normalizeTopic(topic) == wanted && (topic != exclude || !requested.empty())) return check(topic);
-  if (!requested.empty()) {
-    *error = "no topic " + wanted + " in the bag (topics: " +
-             joined(std::vector<std::string>(all_topics.begin(), all_topics.end())) + ")";
-    return "";
-  }
-  if (typed_topics.size() == 1) {
-    const std::string topic = *typed_topics.begin();
-    notes->push_back("using " + topic + " (the only " + type + " topic; " + option + " chooses another)");
-    return check(topic);
-  }
-  if (typed_topics.size() > 1) {
-    *error = "several " + type + " topics (" +
-             joined(std::vector<std::string>(typed_topics.begin(), typed_topics.end())) + "): choose one with " +
-             option;
-    return "";
-  }
-  if (required) *error = "no " + type + " topic in the bag (expected " + wanted + ")";
-  return "";
-}
-
-}  // namespace
-
-// ---- topics ----------------------------------------------------------------------------
-
-std::string normalizeTopic(const std::string& name) {
-  if (name.empty()) return name;
-  const std::size_t start = name.find_first_not_of('/');
-  return start == std::string::npos ? "/" : "/" + name.substr(start);
-}
-
-// ---- output --------------------------------------------------------------------------
-
-const char* StatsCsvWriter::header() { return "stamp,contacts,rows,iterations,residual,converged,status,solve_time"; }
-
-std::string StatsCsvWriter::row(const SolverStats& s) {
-  return stampDigits(s.header.stamp) + "," + std::to_string(s.num_contacts) + "," + std::to_string(s.num_rows) + "," +
-         std::to_string(s.iterations) + "," + exactNumber(s.residual) + "," + (s.converged ? "true" : "false") + "," +
-         s.status + "," + exactNumber(s.solve_time);
-}
-
-std::string StatsCsvWriter::open(const std::string& path) {
-  out_.open(path);
-  if (!out_) return path + ": cannot write (" + std::strerror(errno) + ")";
-  out_ << header() << "\n";
-  return "";
-}
-
-void StatsCsvWriter::write(const SolverStats& stats) { out_ << row(stats) << "\n"; }
-
-// ---- replay ----------------------------------------------------------------------------
-
-namespace {
 
 struct Reference {
   std::map<ros::Time, ConstraintForces::ConstPtr> forces;

@@ -23,7 +23,7 @@ const std::set<std::string>& nodeOnlyParams() {
 // dynamic_reconfigure's copies too (rosparam dump of a running node)
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) #name, #name "_x", #name "_y", #name "_z",
 #define LCS_NODE_ENUM(name, member, def, group, doc) #name,
-#include "lcp_contact_solver/ros/node_param_table.def"
+#include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
 #undef LCS_NODE_BOOL

@@ -1,16 +1,12 @@
 #include "lcp_contact_solver/ros/sim/mujoco_bridge_node.h"
 
-#include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-
-#include <diagnostic_msgs/KeyValue.h>
+#include "lcp_contact_solver/ros/msg_conversion/mujoco_msg_conversion.h"
+#include "lcp_contact_solver/scene/mujoco_comparison.h"
 
 #include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
-#include <iostream>
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
@@ -20,28 +16,6 @@ namespace lcp_contact_solver_ros {
 namespace {
 
 namespace scene = lcs::scene;
-using lcp_contact_solver::ContactPoint;
-
-bool finite(double v) { return std::isfinite(v); }
-
-std::string validate(const MujocoBridgeSettings& s) {
-  int dummy = 0;
-  std::string why;
-  if (s.model.empty()) return "parameter model must name an MJCF file";
-  if (s.mode != "cross_check" && s.mode != "drive") return "parameter mode must be cross_check or drive";
-  if (s.cone != "model" && !scene::parseMujocoCone(s.cone, &dummy, &why)) return "parameter cone: " + why + " or model";
-  if (s.mujoco_solver != "model" && !scene::parseMujocoSolver(s.mujoco_solver, &dummy, &why))
-    return "parameter mujoco_solver: " + why + " or model";
-  if (!finite(s.mujoco_tolerance)) return "parameter mujoco_tolerance must be finite (< 0 keeps the model's)";
-  if (s.steps < 0) return "parameter steps must be >= 0 (0 runs for ever, or for ~duration)";
-  if (!finite(s.dt) || s.dt < 0.0) return "parameter dt must be >= 0 (0 keeps the model's timestep)";
-  if (s.min_report_subscribers < 0) return "parameter min_report_subscribers must be >= 0";
-  if (s.storage != "auto" && s.storage != "dense" && s.storage != "block_sparse")
-    return "parameter storage must be auto, dense or block_sparse";
-  if (s.dense_max_rows < 0) return "parameter dense_max_rows must be >= 0";
-  if (!finite(s.max_rel_warn) || s.max_rel_warn <= 0.0) return "parameter max_rel_warn must be > 0";
-  return "";
-}
 
 MujocoBridgeSettings loadOrThrow(const ros::NodeHandle& pnh) {
   MujocoBridgeSettings settings;
@@ -66,124 +40,8 @@ std::unique_ptr<scene::MujocoWorld> loadWorld(const MujocoBridgeSettings& s) {
   return world;
 }
 
-void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value) {
-  diagnostic_msgs::KeyValue kv;
-  kv.key = key;
-  kv.value = value;
-  status->values.push_back(kv);
-}
-
-void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, double value) {
-  std::ostringstream out;
-  out << std::setprecision(17) << value;
-  addValue(status, key, out.str());
-}
-
-const char* const kStateNames[lcs::core::kContactStateCount] = {"open", "stick", "slip", "ignored", "closed"};
-
 }  // namespace
 
-std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
-  const std::string link_error = loadLinkSettings(pnh, s);
-  if (!link_error.empty()) return link_error;
-  for (const std::string& error : {
-           readParam(pnh, "model", &s->model, "a string"), readParam(pnh, "mode", &s->mode, "a string"),
-           readParam(pnh, "cone", &s->cone, "a string"),
-           readParam(pnh, "mujoco_solver", &s->mujoco_solver, "a string"),
-           readParam(pnh, "mujoco_iterations", &s->mujoco_iterations, "an integer"),
-           readParam(pnh, "mujoco_tolerance", &s->mujoco_tolerance, "a number"),
-           readParam(pnh, "compare", &s->compare, "true or false"),
-           readParam(pnh, "reference", &s->reference, "true or false"),
-           readParam(pnh, "steps", &s->steps, "an integer"), readParam(pnh, "dt", &s->dt, "a number"),
-           readParam(pnh, "min_report_subscribers", &s->min_report_subscribers, "an integer"),
-           readParam(pnh, "include_limits", &s->include_limits, "true or false"),
-           readParam(pnh, "include_equalities", &s->include_equalities, "true or false"),
-           readParam(pnh, "storage", &s->storage, "a string"),
-           readParam(pnh, "dense_max_rows", &s->dense_max_rows, "an integer"),
-           readParam(pnh, "max_rel_warn", &s->max_rel_warn, "a number"),
-           readParam(pnh, "print_summary", &s->print_summary, "true or false")}) {
-    if (!error.empty()) return error;
-  }
-  return validate(*s);
-}
-
-// ---- messages -------------------------------------------------------------------------------
-
-lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& problem, const scene::MujocoWorld& world,
-                                                   const std_msgs::Header& header) {
-  std::vector<ContactFrame> frames(problem.entries.size());
-  std::vector<ContactBodies> bodies(problem.entries.size());
-  for (std::size_t i = 0; i < problem.entries.size(); ++i) {
-    const scene::MujocoEntry& e = problem.entries[i];
-    // Elliptic contacts keep MuJoCo's own frame, so the rows stay its rows; the other
-    // entries (pyramid edges, limits, equalities) leave the tangents to the reader's rule.
-    if (e.kind == scene::MujocoRowKind::kElliptic) {
-      frames[i].position = e.position;
-      frames[i].normal = e.normal;
-      frames[i].tangent1 = e.tangent1;
-      frames[i].tangent2 = e.tangent2;
-    } else {
-      frames[i] = lcs::core::frameFromNormal(e.position, e.normal);
-    }
-    bodies[i] = {world.bodyName(e.body_a), world.bodyName(e.body_b)};
-  }
-  lcp_contact_solver::ContactArray msg = toContactArrayMsg(problem.problem, frames, bodies, header);
-  // MuJoCo's reference acceleration (solref) is already in d_free: no Baumgarte correction
-  // or softness on top, whatever the node's ~erp / ~softness (the adapter's contacts keep
-  // the core's "use the default" there, so in-process solves are unchanged).
-  for (ContactPoint& p : msg.contacts) p.erp = p.softness = 0.0;
-  return msg;
-}
-
-lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& problem, const std_msgs::Header& header) {
-  lcp_contact_solver::Compliance msg = toComplianceMsg(problem.problem.W);
-  msg.header = header;
-  return msg;
-}
-
-std::string toReferenceForcesMsg(const scene::MujocoProblem& problem, const lcp_contact_solver::ContactArray& contacts,
-                                 const lcp_contact_solver::Compliance& compliance,
-                                 lcp_contact_solver::ConstraintForces* forces) {
-  lcs::core::Problem read;
-  std::vector<ContactFrame> frames;
-  if (std::string error = toProblem(contacts, compliance, 0, &read, &frames); !error.empty()) return error;
-  if (read.rowCount() != problem.mujoco_lambda.size())
-    return std::to_string(problem.mujoco_lambda.size()) + " MuJoCo forces for " + std::to_string(read.rowCount()) +
-           " rows";
-  lcs::core::SolveResult mujoco;
-  mujoco.forces = problem.mujoco_lambda;
-  // Every contact of the bridge carries its own mu (pyramid edges and limits none): the
-  // default is never used.
-  mujoco.states = lcs::core::classifyContacts(read, lcs::core::effectiveMu(read, lcs::core::SolverParams().mu), mujoco.forces);
-  *forces = toConstraintForcesMsg(contacts, frames, read, mujoco);
-  return "";
-}
-
-std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, const scene::MujocoProblem& problem,
-                            Eigen::VectorXd* lambda) {
-  const std::size_t n = problem.problem.contacts.size();
-  if (forces.forces.size() != n)
-    return std::to_string(forces.forces.size()) + " forces for " + std::to_string(n) + " contacts";
-  const std::vector<int> offsets = problem.problem.rowOffsets();
-  lambda->resize(offsets.back());
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& f = forces.forces[i];
-    if (f.id != problem.problem.contacts[i].id)
-      return "force " + std::to_string(i) + " has id " + std::to_string(f.id) + ", the contact " +
-             std::to_string(problem.problem.contacts[i].id);
-    const int rows = offsets[i + 1] - offsets[i];
-    if (static_cast<int>(f.lambda.size()) != rows)
-      return "force " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) + " rows, the contact " +
-             std::to_string(rows);
-    for (int r = 0; r < rows; ++r) {
-      if (!std::isfinite(f.lambda[r])) return "force " + std::to_string(i) + " is not finite";
-      (*lambda)[offsets[i] + r] = f.lambda[r];
-    }
-  }
-  return "";
-}
-
-// ---- node --------------------------------------------------------------------------------
 
 MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
     : nh_(nh),
@@ -467,72 +325,6 @@ void MujocoBridgeNode::forwardReference() {
 void MujocoBridgeNode::stepReference() {
   const std::string error = scene::integrateEuler(reference_->model(), reference_->data());
   if (!error.empty()) throw std::runtime_error(error);
-}
-
-void MujocoBridgeNode::statusLine(int contacts, int rows) {
-  const double t = world_->data()->time;
-  if (t + 1e-9 * dt_ < next_status_time_) return;
-  while (next_status_time_ <= t + 1e-9 * dt_) next_status_time_ += settings_.status_period;
-  if (settings_.print_summary) {
-    std::ostringstream line;
-    if (!header_printed_) {
-      line << "  sim time  contacts  rows  max residual  max rel diff  penetration [m]  energy [J]  missed\n";
-      header_printed_ = true;
-    }
-    const bool compares = !drive_ || settings_.compare;
-    line << std::fixed << std::setprecision(2) << std::setw(8) << t << " s" << std::setw(10) << contacts
-         << std::setw(6) << rows << std::scientific << std::setprecision(2) << std::setw(14) << period_max_residual_;
-    if (compares) line << std::setw(14) << period_max_rel_; else line << std::setw(14) << "-";
-    line << std::setw(17) << totals_.last_penetration << std::fixed << std::setprecision(3) << std::setw(12)
-         << totals_.last_energy << std::setw(8) << link_.counters().misses() << '\n';
-    std::cout << line.str() << std::flush;
-  }
-  period_max_rel_ = 0.0;
-  period_max_residual_ = 0.0;
-}
-
-void MujocoBridgeNode::writeSummary(std::ostream& out) const {
-  const mjModel* m = world_->model();
-  const mjData* d = world_->data();
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(2);
-  text << "mujoco " << settings_.model << " (cone " << scene::mujocoConeName(m->opt.cone) << ", mode "
-       << settings_.mode << "): " << counters_.steps << " steps, " << d->time << " s simulated";
-  if (run_wall_time_ > 0.0) text << " in " << run_wall_time_ << " s wall";
-  text << "\nforces: " << counters_.forces_applied << " of " << counters_.steps_with_rows
-       << " steps with contacts from the solver; " << link_.counters().force_timeouts << " timeouts, "
-       << link_.counters().solver_failures << " solver failures, " << link_.counters().bad_forces << " mismatched";
-  if (drive_) text << "; " << counters_.fallbacks << " steps by MuJoCo's own solver";
-  if (counters_.extract_errors > 0) text << "; " << counters_.extract_errors << " steps not convertible";
-  text << "\ncontacts: " << totals_.last_contacts << " at the end, " << totals_.max_contacts << " at most ("
-       << totals_.max_rows << " rows at most)";
-  text << std::scientific << std::setprecision(2);
-  text << "\nour residual: " << totals_.last_residual << " at the end, " << totals_.max_residual << " at most";
-  if (counters_.compared > 0) {
-    text << "\nmax difference to MuJoCo's forces (" << scene::mujocoSolverName(m->opt.solver) << "): "
-         << totals_.max_rel_diff << " relative, " << totals_.max_abs_diff << " N absolute, over "
-         << counters_.compared << " steps";
-    if (m->opt.cone == mjCONE_ELLIPTIC) {
-      text << "\n  per state of our contacts (MuJoCo solves the convex relaxation, we solve Coulomb):";
-      for (int k = 0; k < 3; ++k)
-        text << ' ' << kStateNames[k] << ' ' << totals_.state_max_rel[k] << " (" << totals_.state_count[k] << ")";
-    }
-  }
-  if (totals_.our_solves > 0 && totals_.mujoco_solves > 0)
-    text << "\nsolve time per step: ours " << totals_.our_solve_time / totals_.our_solves * 1e3 << " ms, MuJoCo's "
-         << totals_.mujoco_solve_time / totals_.mujoco_solves * 1e3 << " ms (" << scene::mujocoSolverName(m->opt.solver)
-         << ", " << m->opt.iterations << " iterations, tolerance " << std::defaultfloat << m->opt.tolerance
-         << "; not matched in accuracy: see mujoco_bench)";
-  text << std::fixed << std::setprecision(4) << "\nstate: energy " << totals_.first_energy << " J -> "
-       << totals_.last_energy << " J, penetration " << totals_.last_penetration << " m at the end, "
-       << totals_.max_penetration << " m at most";
-  if (m->nq >= 3 && m->njnt > 0 && m->jnt_type[0] == mjJNT_FREE) text << ", root height " << d->qpos[2] << " m";
-  if (reference_)
-    text << "\nMuJoCo's own run beside (~reference): bodies up to " << totals_.max_ref_position_diff
-         << " m from theirs, energy up to " << totals_.max_ref_energy_diff << " J apart, contact pairs differ on "
-         << totals_.ref_contact_pair_steps_differ << " steps";
-  text << '\n';
-  out << text.str();
 }
 
 }  // namespace lcp_contact_solver_ros

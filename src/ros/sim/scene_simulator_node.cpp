@@ -1,6 +1,6 @@
 #include "lcp_contact_solver/ros/sim/scene_simulator_node.h"
 
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/scene/scene.h"
 
 #include <lcp_contact_solver/Compliance.h>
@@ -68,19 +68,12 @@ scene::Scene loadScene(const SimulatorSettings& settings) {
 }  // namespace
 
 std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings* s) {
-  const std::string link_error = loadLinkSettings(pnh, s);
-  if (!link_error.empty()) return link_error;
-  for (const std::string& error : {
-           readParam(pnh, "scene", &s->scene, "a string"), readParam(pnh, "scene_dir", &s->scene_dir, "a string"),
-           readParam(pnh, "dt", &s->dt, "a number"),
-           readParam(pnh, "marker_period", &s->marker_period, "a number"),
-           readParam(pnh, "min_subscribers", &s->min_subscribers, "an integer"),
-           readParam(pnh, "print_status", &s->print_status, "true or false"),
-           readParam(pnh, "rest_linear_velocity", &s->rest_linear_velocity, "a number"),
-           readParam(pnh, "rest_angular_velocity", &s->rest_angular_velocity, "a number")}) {
-    if (!error.empty()) return error;
-  }
-  return validate(*s);
+  return loadSettings(pnh, s,
+                      {{"scene", &s->scene}, {"scene_dir", &s->scene_dir}, {"dt", &s->dt},
+                       {"marker_period", &s->marker_period}, {"min_subscribers", &s->min_subscribers},
+                       {"print_status", &s->print_status}, {"rest_linear_velocity", &s->rest_linear_velocity},
+                       {"rest_angular_velocity", &s->rest_angular_velocity}},
+                      [s] { return validate(*s); });
 }
 
 SceneSimulatorNode::SceneSimulatorNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)

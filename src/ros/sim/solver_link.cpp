@@ -20,21 +20,42 @@ bool finite(double v) { return std::isfinite(v); }
 
 void serve(double seconds) { ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(seconds)); }
 
+// What a parameter of this setting's type must be, for the error message.
+const char* expectedValue(const std::variant<double*, int*, bool*, std::string*>& setting) {
+  switch (setting.index()) {
+    case 0: return "a number";
+    case 1: return "an integer";
+    case 2: return "true or false";
+    default: return "a string";
+  }
+}
+
 }  // namespace
 
-std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* s) {
-  for (const std::string& error : {
-           readParam(pnh, "duration", &s->duration, "a number"),
-           readParam(pnh, "rate_factor", &s->rate_factor, "a number"),
-           readParam(pnh, "force_timeout", &s->force_timeout, "a number"),
-           readParam(pnh, "wait_for_solver", &s->wait_for_solver, "a number"),
-           readParam(pnh, "linger", &s->linger, "a number"),
-           readParam(pnh, "frame_id", &s->frame_id, "a string"),
-           readParam(pnh, "publish_clock", &s->publish_clock, "true or false"),
-           readParam(pnh, "status_period", &s->status_period, "a number")}) {
-    if (!error.empty()) return error;
+std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamField> fields) {
+  for (const ParamField& field : fields) {
+    if (!pnh.hasParam(field.name)) continue;
+    const bool read = std::visit([&](auto* setting) { return pnh.getParam(field.name, *setting); }, field.setting);
+    if (!read) return "parameter " + pnh.resolveName(field.name) + " must be " + expectedValue(field.setting);
   }
-  return validateLinkSettings(*s);
+  return "";
+}
+
+std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* s) {
+  const std::string error = readParams(pnh, {{"duration", &s->duration}, {"rate_factor", &s->rate_factor},
+                                             {"force_timeout", &s->force_timeout},
+                                             {"wait_for_solver", &s->wait_for_solver}, {"linger", &s->linger},
+                                             {"frame_id", &s->frame_id}, {"publish_clock", &s->publish_clock},
+                                             {"status_period", &s->status_period}});
+  return error.empty() ? validateLinkSettings(*s) : error;
+}
+
+std::string loadSettings(const ros::NodeHandle& pnh, LinkSettings* link,
+                         std::initializer_list<ParamField> fields,
+                         const std::function<std::string()>& validate) {
+  std::string error = loadLinkSettings(pnh, link);
+  if (error.empty()) error = readParams(pnh, fields);
+  return error.empty() ? validate() : error;
 }
 
 std::string validateLinkSettings(const LinkSettings& s) {

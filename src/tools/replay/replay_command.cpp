@@ -3,7 +3,7 @@
 
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "lcp_contact_solver/ros/replay/text.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "replay/summary.h"
 
 #include <CLI/CLI.hpp>

@@ -8,7 +8,7 @@
 #pragma once
 
 #include "lcp_contact_solver/core/solver_params.h"
-#include "lcp_contact_solver/ros/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/replay/answer_check.h"
 #include "lcp_contact_solver/ros/replay/force_comparison.h"
 #include "lcp_contact_solver/ros/replay/stamp_pairer.h"
@@ -20,36 +20,12 @@
 #include <ros/time.h>
 
 #include <cstddef>
-#include <fstream>
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace lcp_contact_solver_ros {
-
-// ---- topics ----------------------------------------------------------------------------
-
-// "/name" for "name" or "/name" (bags store resolved names, users type either).
-std::string normalizeTopic(const std::string& name);
-
-// ---- output ----------------------------------------------------------------------------
-
-// Per-cycle stats as CSV: stamp,contacts,rows,iterations,residual,converged,status,solve_time
-class StatsCsvWriter {
- public:
-  // Empty string, or why the file cannot be written.
-  std::string open(const std::string& path);
-  void write(const lcp_contact_solver::SolverStats& stats);
-  bool good() const { return out_.good(); }
-  static const char* header();
-  static std::string row(const lcp_contact_solver::SolverStats& stats);
-
- private:
-  std::ofstream out_;
-};
-
-// ---- replay ----------------------------------------------------------------------------
 
 struct ReplayOptions {
   std::string bag;          // input

@@ -26,13 +26,12 @@
 // to MuJoCo's own solver for the step; both are counted and warned about.
 #pragma once
 
+#include "lcp_contact_solver/core/solve_result.h"
+#include "lcp_contact_solver/ros/sim/mujoco_bridge_settings.h"
 #include "lcp_contact_solver/ros/sim/solver_link.h"
 #include "lcp_contact_solver/scene/mujoco_adapter.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
-#include <lcp_contact_solver/Compliance.h>
-#include <lcp_contact_solver/ConstraintForces.h>
-#include <lcp_contact_solver/ContactArray.h>
 #include <ros/ros.h>
 
 #include <Eigen/Core>
@@ -45,57 +44,6 @@
 namespace lcp_contact_solver_ros {
 
 namespace lcs = ::lcp_contact_solver;
-
-// The shared parameters (duration: simulated s to run when steps = 0, rate_factor,
-// force_timeout, wait_for_solver, linger, frame_id (MuJoCo's world frame), publish_clock,
-// status_period: solver_link.h) and:
-struct MujocoBridgeSettings : LinkSettings {
-  std::string model = "/usr/share/mujoco/model/humanoid/humanoid.xml";  // MJCF or MJB
-  std::string mode = "cross_check";  // cross_check | drive
-  std::string cone = "pyramidal";    // pyramidal | elliptic | model (keep the model's)
-  // MuJoCo's own solver (cross_check, and drive with ~compare). The defaults run its PGS to
-  // its fixed point, so a difference is ours: tolerance 0 runs every iteration.
-  std::string mujoco_solver = "pgs";  // pgs | cg | newton | model
-  int mujoco_iterations = 3000;       // <= 0: the model's
-  double mujoco_tolerance = 0.0;      // < 0: the model's
-  bool compare = true;                // drive: also run MuJoCo's solver to report the difference
-  // drive: also step a second copy of the model from the same start with MuJoCo's own solver
-  // and report the distance to it each step (body positions, energy, contact pairs): the
-  // physics check where the forces differ by design (elliptic: MuJoCo's convex relaxation).
-  bool reference = false;
-  int steps = 0;                      // steps to run; 0 = for ever (or ~duration)
-  double dt = 0.0;                    // MuJoCo's timestep override (s); 0 = the model's
-  int min_report_subscribers = 0;     // also wait for this many ~step_report subscribers (tests)
-  bool include_limits = true;         // joint/tendon limits as unilateral rows
-  bool include_equalities = true;     // equality constraints as bilateral rows
-  std::string storage = "auto";       // W: auto | dense | block_sparse
-  int dense_max_rows = 200;           // auto: block-sparse above this many rows
-  double max_rel_warn = 1e-6;         // cross_check: warn when the relative difference exceeds it
-  bool print_summary = false;         // status lines and the final summary on stdout (demo)
-};
-
-// Reads every private parameter present over the defaults. Empty string, or a sentence naming
-// the parameter of the wrong type or value.
-std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* settings);
-
-// The messages of one step's problem (positions and directions in MuJoCo's world frame).
-lcp_contact_solver::ContactArray toContactArrayMsg(const lcs::scene::MujocoProblem& problem,
-                                                   const lcs::scene::MujocoWorld& world,
-                                                   const std_msgs::Header& header);
-lcp_contact_solver::Compliance toComplianceMsg(const lcs::scene::MujocoProblem& problem,
-                                               const std_msgs::Header& header);
-// MuJoCo's own forces of the step (problem.mujoco_lambda: efc_force in problem rows) as the
-// node would publish them for `contacts` and `compliance` (toProblem, then
-// toConstraintForcesMsg with the states classifyContacts gives): same ids, rows and layout,
-// so they compare with the node's row by row. Empty string, or why the messages do not
-// convert (they came from `problem`, so only for a bug).
-std::string toReferenceForcesMsg(const lcs::scene::MujocoProblem& problem,
-                                 const lcp_contact_solver::ContactArray& contacts,
-                                 const lcp_contact_solver::Compliance& compliance,
-                                 lcp_contact_solver::ConstraintForces* forces);
-// λ (problem rows) from the solver's forces for this problem; empty string or why they do not fit.
-std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces,
-                            const lcs::scene::MujocoProblem& problem, Eigen::VectorXd* lambda);
 
 // The steps so far (the misses by cause: SolverLink::counters()).
 struct MujocoBridgeCounters {
@@ -160,6 +108,10 @@ class MujocoBridgeNode {
   // compare; then, after our step, step it.
   void forwardReference();
   void stepReference();
+  // A ~step_report value (numbers with all their digits); the contact states' names.
+  static void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value);
+  static void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, double value);
+  static const char* const kStateNames[lcs::core::kContactStateCount];
 
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;

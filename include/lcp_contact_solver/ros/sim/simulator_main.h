@@ -1,7 +1,7 @@
 // main() of a simulator node beside the solver (scene_simulator, mujoco_bridge).
 #pragma once
 
-#include "lcp_contact_solver/ros/sim_time_guard.h"
+#include "lcp_contact_solver/ros/sim/sim_time_guard.h"
 
 #include <ros/ros.h>
 

@@ -18,7 +18,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <string>
+#include <variant>
 
 namespace lcp_contact_solver_ros {
 
@@ -35,18 +37,27 @@ struct LinkSettings {
   double status_period = 1.0;    // simulated s between status lines
 };
 
-// Reads `name` when present; empty string, or "parameter <name> must be <expected>".
-template <typename T>
-std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* value, const char* expected) {
-  if (!pnh.hasParam(name)) return "";
-  if (!pnh.getParam(name, *value)) return "parameter " + pnh.resolveName(name) + " must be " + expected;
-  return "";
-}
+// One private parameter and the setting it goes to; the setting's type says what the
+// parameter must be: a number (double), an integer (int), true or false (bool), a string.
+struct ParamField {
+  const char* name;
+  std::variant<double*, int*, bool*, std::string*> setting;
+};
+
+// Reads each parameter present over its setting's value (the default): empty string, or
+// "parameter <name> must be <what>" for the first of another type.
+std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamField> fields);
 
 // Reads the LinkSettings parameters present over `settings`, then validates them: empty
 // string or a sentence naming the parameter.
 std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* settings);
 std::string validateLinkSettings(const LinkSettings& settings);
+
+// A simulator's settings: its LinkSettings part (loadLinkSettings), then its own `fields`,
+// then `validate` of its own values. Empty string, or the first fault.
+std::string loadSettings(const ros::NodeHandle& pnh, LinkSettings* link,
+                         std::initializer_list<ParamField> fields,
+                         const std::function<std::string()>& validate);
 
 // The stamp of step k (its contacts, compliance, forces and /clock): ros::Time(k·dt),
 // rounded to the nanosecond, so stamps stay exact multiples of dt however long the run.

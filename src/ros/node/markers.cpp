@@ -1,7 +1,7 @@
-#include "lcp_contact_solver/ros/markers.h"
+#include "lcp_contact_solver/ros/node/markers.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
-#include "lcp_contact_solver/ros/msg_primitives.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_primitives.h"
 
 #include <algorithm>
 #include <cmath>

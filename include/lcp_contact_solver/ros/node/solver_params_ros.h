@@ -4,7 +4,7 @@
 // from the service's "name=value" overrides, and validated before use.
 #pragma once
 
-#include "lcp_contact_solver/ros/input_queue.h"
+#include "lcp_contact_solver/ros/node/input_queue.h"
 #include "lcp_contact_solver/core/solver_params.h"
 
 #include <lcp_contact_solver/ContactSolverConfig.h>

@@ -5,11 +5,11 @@
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/cycle_solver.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/input_queue.h"
-#include "lcp_contact_solver/ros/solve_rate_status.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/input_queue.h"
+#include "lcp_contact_solver/ros/node/solve_rate_status.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>

@@ -1,6 +1,6 @@
 // The node class inside a nodelet manager: messages between nodelets pass as shared
 // pointers without serialization.
-#include "lcp_contact_solver/ros/contact_solver_node.h"
+#include "lcp_contact_solver/ros/node/contact_solver_node.h"
 
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>

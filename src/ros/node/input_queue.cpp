@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/input_queue.h"
+#include "lcp_contact_solver/ros/node/input_queue.h"
 
 #include <sstream>
 

@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
 
 namespace lcp_contact_solver_ros {
 

@@ -8,7 +8,7 @@
 #include "lcp_contact_solver/core/problem.h"
 #include "lcp_contact_solver/core/solve_result.h"
 #include "lcp_contact_solver/core/solver_params.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <lcp_contact_solver/Compliance.h>
 #include <lcp_contact_solver/ConstraintForces.h>

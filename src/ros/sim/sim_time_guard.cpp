@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/sim_time_guard.h"
+#include "lcp_contact_solver/ros/sim/sim_time_guard.h"
 
 #include <ros/console.h>
 #include <ros/param.h>

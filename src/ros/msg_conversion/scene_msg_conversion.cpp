@@ -1,7 +1,7 @@
-#include "lcp_contact_solver/ros/scene_msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/msg_primitives.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_primitives.h"
 
 #include <Eigen/Geometry>
 

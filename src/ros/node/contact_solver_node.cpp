@@ -1,8 +1,8 @@
-#include "lcp_contact_solver/ros/contact_solver_node.h"
+#include "lcp_contact_solver/ros/node/contact_solver_node.h"
 
 #include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/ros/cycle_log.h"
-#include "lcp_contact_solver/ros/markers.h"
+#include "lcp_contact_solver/ros/node/cycle_log.h"
+#include "lcp_contact_solver/ros/node/markers.h"
 
 #include <lcp_contact_solver/ConstraintForces.h>
 #include <lcp_contact_solver/SolverStats.h>

@@ -1,17 +1,17 @@
-#include "lcp_contact_solver/ros/msg_conversion.h"
+// ContactArray + Compliance → core Problem (toProblem, msg_conversion.h): every field
+// validated before it is used, every size before anything is allocated.
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/msg_primitives.h"
 
-#include <Eigen/Geometry>
+#include <Eigen/Core>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
 #include <numeric>
-#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
@@ -19,20 +19,8 @@ namespace lcp_contact_solver_ros {
 
 namespace {
 
-// Directions closer to zero than this are "not given" (tangents) or invalid (normal).
-constexpr double kZeroLength = 1e-9;
-// Given tangents must be orthogonal to the normal and to each other within this cosine.
-constexpr double kOrthogonalityTolerance = 1e-3;
 // Bounds the allocation a hostile message can cause when max_rows is 0 (no limit).
 constexpr std::int64_t kHardRowLimit = 1000000;
-
-// toMsgType / fromMsgType are casts because the numbers agree; this keeps them agreeing.
-static_assert(static_cast<int>(lcs::core::ContactType::kFrictional) == lcs::ContactPoint::FRICTIONAL &&
-                  static_cast<int>(lcs::core::ContactType::kFrictionless) == lcs::ContactPoint::FRICTIONLESS &&
-                  static_cast<int>(lcs::core::ContactType::kBilateral) == lcs::ContactPoint::BILATERAL &&
-                  static_cast<int>(lcs::core::ContactType::kTorsional) == lcs::ContactPoint::TORSIONAL &&
-                  static_cast<int>(lcs::core::ContactType::kRolling) == lcs::ContactPoint::ROLLING,
-              "ContactPoint's type constants must equal the core's ContactType values");
 
 std::string contactName(std::size_t index, std::int64_t id) {
   return "contact " + std::to_string(index) + " (id " + std::to_string(id) + ")";
@@ -284,48 +272,7 @@ std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& o
   }
 }
 
-// Up to three rows of a contact along (n, t1, t2); later bilateral rows have no direction.
-Eigen::Vector3d directionalForce(const lcs::core::Contact& contact, const double* lambda) {
-  Eigen::Vector3d components = Eigen::Vector3d::Zero();
-  for (int k = 0; k < std::min(3, contact.rows); ++k) components[k] = lambda[k];
-  return components;
-}
-
 }  // namespace
-
-std::uint8_t toMsgType(lcs::core::ContactType type) { return static_cast<std::uint8_t>(type); }
-
-lcs::core::ContactType fromMsgType(std::uint8_t type) { return static_cast<lcs::core::ContactType>(type); }
-
-void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2) {
-  lcs::core::tangentsFromNormal(normal, tangent1, tangent2);
-}
-
-std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame) {
-  if (!finite(contact.position)) return "has a non-finite position";
-  if (!finite(contact.normal) || !finite(contact.tangent1) || !finite(contact.tangent2))
-    return "has a non-finite direction";
-  const Eigen::Vector3d n = toEigen(contact.normal);
-  if (n.norm() < kZeroLength) return "has a zero normal";
-  frame->position = toEigen(contact.position);
-  frame->normal = n.normalized();
-  const Eigen::Vector3d t1 = toEigen(contact.tangent1), t2 = toEigen(contact.tangent2);
-  const bool has_t1 = t1.norm() >= kZeroLength, has_t2 = t2.norm() >= kZeroLength;
-  if (!has_t1 && !has_t2) {
-    deriveTangents(frame->normal, &frame->tangent1, &frame->tangent2);
-    frame->derived_tangents = true;
-    return "";
-  }
-  if (has_t1 != has_t2) return "gives one tangent only (give both or neither)";
-  frame->tangent1 = t1.normalized();
-  frame->tangent2 = t2.normalized();
-  frame->derived_tangents = false;
-  if (std::abs(frame->tangent1.dot(frame->normal)) > kOrthogonalityTolerance ||
-      std::abs(frame->tangent2.dot(frame->normal)) > kOrthogonalityTolerance ||
-      std::abs(frame->tangent1.dot(frame->tangent2)) > kOrthogonalityTolerance)
-    return "has tangents that are not orthogonal to the normal and each other";
-  return "";
-}
 
 std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
                       int max_rows, lcs::core::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
@@ -335,229 +282,6 @@ std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& 
   if (error.empty() && validate) error = lcs::core::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
-}
-
-lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem, const std::vector<ContactFrame>& frames,
-                                    const std::vector<ContactBodies>& bodies, const std_msgs::Header& header) {
-  lcs::ContactArray msg;
-  msg.header = header;
-  const std::vector<int> offsets = problem.rowOffsets();
-  msg.contacts.resize(problem.contacts.size());
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const lcs::core::Contact& c = problem.contacts[i];
-    const ContactFrame& f = frames[i];
-    lcs::ContactPoint& out = msg.contacts[i];
-    out.id = c.id;
-    out.body_a = bodies[i].body_a;
-    out.body_b = bodies[i].body_b;
-    out.position = toPoint(f.position);
-    out.normal = toVector3(f.normal);
-    if (!f.derived_tangents) {
-      out.tangent1 = toVector3(f.tangent1);
-      out.tangent2 = toVector3(f.tangent2);
-    }
-    out.d_free.assign(problem.d_free.data() + offsets[i], problem.d_free.data() + offsets[i + 1]);
-    out.mu = c.mu;
-    out.mu_torsional = c.mu_torsional;
-    out.mu_rolling = c.mu_rolling;
-    out.gap = c.gap;
-    out.erp = c.erp;
-    out.softness = c.softness;
-    out.type = toMsgType(c.type);
-    out.rows = static_cast<std::uint32_t>(c.rows);
-  }
-  return msg;
-}
-
-lcs::Compliance toComplianceMsg(const lcs::core::ComplianceMatrix& W) {
-  lcs::Compliance msg;
-  msg.rows = static_cast<std::uint32_t>(lcs::core::complianceRows(W));
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
-    msg.storage = lcs::Compliance::STORAGE_DENSE;
-    msg.data.reserve(dense->size());
-    for (Eigen::Index r = 0; r < dense->rows(); ++r)
-      for (Eigen::Index c = 0; c < dense->cols(); ++c) msg.data.push_back((*dense)(r, c));
-    return msg;
-  }
-  const auto& sparse = std::get<lcs::core::BlockSparseMatrix>(W);
-  msg.storage = lcs::Compliance::STORAGE_BLOCK_SPARSE;
-  for (int i = 0; i < sparse.blockCount(); ++i) {
-    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
-      msg.block_rows.push_back(static_cast<std::uint32_t>(i));
-      msg.block_cols.push_back(static_cast<std::uint32_t>(sparse.block_col[k]));
-    }
-  }
-  msg.block_data = sparse.values;  // stored in the same (block-row) order
-  return msg;
-}
-
-lcs::Compliance toComplianceMsg(const lcs::core::Problem& problem) {
-  if (!problem.bodies) return toComplianceMsg(problem.W);
-  const lcs::core::BodyCompliance& bodies = *problem.bodies;
-  lcs::Compliance msg;
-  msg.storage = lcs::Compliance::STORAGE_BODIES;
-  msg.rows = static_cast<std::uint32_t>(bodies.rowCount());
-  msg.body_compliance.reserve(36 * bodies.body_compliance.size());
-  for (const lcs::core::BodyMatrix& C : bodies.body_compliance)
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < 6; ++c) msg.body_compliance.push_back(C(r, c));
-  for (const lcs::core::ContactJacobian& c : bodies.contacts) {
-    msg.contact_bodies.push_back(c.body_a);
-    msg.contact_bodies.push_back(c.body_b);
-    if (c.body_a >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_a.data(), c.jacobian_a.data() + 6 * c.rows);
-    if (c.body_b >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_b.data(), c.jacobian_b.data() + 6 * c.rows);
-  }
-  msg.body_diagonal.assign(bodies.diagonal.data(), bodies.diagonal.data() + bodies.diagonal.size());
-  return msg;
-}
-
-lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
-                                            const std::vector<ContactFrame>& frames,
-                                            const lcs::core::Problem& problem,
-                                            const lcs::core::SolveResult& result) {
-  lcs::ConstraintForces msg;
-  msg.header = contacts.header;
-  const std::vector<int> offsets = problem.rowOffsets();
-  msg.forces.resize(problem.contacts.size());
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const lcs::core::Contact& contact = problem.contacts[i];
-    const ContactFrame& frame = frames[i];
-    const double* lambda = result.forces.data() + offsets[i];
-    const Eigen::Vector3d components = directionalForce(contact, lambda);
-    lcs::ContactForce& out = msg.forces[i];
-    out.id = contact.id;
-    out.body_a = contacts.contacts[i].body_a;
-    out.body_b = contacts.contacts[i].body_b;
-    out.state = static_cast<std::uint8_t>(result.states[i]);
-    out.normal_force = components[0];
-    out.tangent1_force = components[1];
-    out.tangent2_force = components[2];
-    out.force = toVector3(frame.normal * components[0] + frame.tangent1 * components[1] +
-                          frame.tangent2 * components[2]);
-    out.position = toPoint(frame.position);
-    out.normal = toVector3(frame.normal);
-    out.tangent1 = toVector3(frame.tangent1);
-    out.tangent2 = toVector3(frame.tangent2);
-    out.lambda.assign(lambda, lambda + contact.rows);
-    if (contact.type == lcs::core::ContactType::kTorsional || contact.type == lcs::core::ContactType::kRolling) {
-      Eigen::Vector3d torque = frame.normal * lambda[3];
-      if (contact.rows == 6) torque += frame.tangent1 * lambda[4] + frame.tangent2 * lambda[5];
-      out.torque = toVector3(torque);
-    }
-  }
-  msg.wrenches = sumBodyPairWrenches(msg.forces);
-  return msg;
-}
-
-std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::ContactForce>& forces) {
-  std::vector<lcs::BodyPairWrench> wrenches;
-  // Pairs in order of first appearance; the lookup by hash, and the previous contact's pair
-  // first (a simulator lists a pair's contacts together): no string copy per contact.
-  struct PairHash {
-    std::size_t operator()(const std::pair<const std::string*, const std::string*>& k) const {
-      const std::size_t a = std::hash<std::string>()(*k.first);
-      return a ^ (std::hash<std::string>()(*k.second) + 0x9e3779b97f4a7c15ULL + (a << 6) + (a >> 2));
-    }
-  };
-  struct PairEqual {
-    bool operator()(const std::pair<const std::string*, const std::string*>& x,
-                    const std::pair<const std::string*, const std::string*>& y) const {
-      return *x.first == *y.first && *x.second == *y.second;
-    }
-  };
-  std::unordered_map<std::pair<const std::string*, const std::string*>, std::size_t, PairHash, PairEqual> index;
-  std::vector<Eigen::Vector3d> force_sum, torque_sum;
-  std::size_t last = 0;
-  for (const lcs::ContactForce& f : forces) {
-    std::size_t at;
-    if (!wrenches.empty() && wrenches[last].body_a == f.body_a && wrenches[last].body_b == f.body_b) {
-      at = last;
-    } else {
-      const auto found = index.find({&f.body_a, &f.body_b});  // keys point into `forces`
-      if (found != index.end()) {
-        at = found->second;
-      } else {
-        at = wrenches.size();
-        index.emplace(std::make_pair(&f.body_a, &f.body_b), at);
-        lcs::BodyPairWrench w;
-        w.body_a = f.body_a;
-        w.body_b = f.body_b;
-        wrenches.push_back(w);
-        force_sum.emplace_back(Eigen::Vector3d::Zero());
-        torque_sum.emplace_back(Eigen::Vector3d::Zero());
-      }
-    }
-    last = at;
-    const Eigen::Vector3d force = toEigen(f.force);
-    force_sum[at] += force;
-    torque_sum[at] += toEigen(f.position).cross(force) + toEigen(f.torque);
-  }
-  for (std::size_t k = 0; k < wrenches.size(); ++k) {
-    wrenches[k].wrench.force = toVector3(force_sum[k]);
-    wrenches[k].wrench.torque = toVector3(torque_sum[k]);
-  }
-  return wrenches;
-}
-
-lcs::SolverStats toStatsMsg(const std_msgs::Header& header, const lcs::core::Problem& problem,
-                            const lcs::core::SolveResult& result) {
-  lcs::SolverStats stats;
-  stats.header = header;
-  stats.success = solveGaveForces(result);
-  stats.status_code = static_cast<std::uint8_t>(result.status);
-  stats.status = lcs::core::statusName(result.status);
-  stats.message = result.message;
-  stats.solver = result.solver;
-  stats.friction_model = lcs::core::frictionModelName(result.friction_model);
-  stats.iterations = result.iterations;
-  stats.residual = result.residual;
-  stats.solver_error = result.solver_error;
-  stats.converged = result.converged;
-  stats.solve_time = result.solve_time;
-  stats.num_contacts = static_cast<std::int32_t>(problem.contacts.size());
-  stats.num_rows = problem.rowCount();
-  return stats;
-}
-
-lcs::SolverStats rejectedStatsMsg(const std_msgs::Header& header, std::uint8_t status_code,
-                                  const std::string& message) {
-  lcs::SolverStats stats;
-  stats.header = header;
-  stats.success = false;
-  stats.status_code = status_code;
-  stats.status = statusCodeName(status_code);
-  stats.message = message;
-  return stats;
-}
-
-std::string statusCodeName(std::uint8_t status_code) {
-  if (status_code == lcs::SolverStats::NO_COMPLIANCE) return "no_compliance";
-  if (status_code == lcs::SolverStats::DROPPED) return "dropped";
-  if (status_code < lcs::SolverStats::NO_COMPLIANCE)
-    return lcs::core::statusName(static_cast<lcs::core::SolveStatus>(status_code));  // "unknown" past the last
-  return "unknown";
-}
-
-bool solveGaveForces(const lcs::core::SolveResult& result) {
-  return result.status == lcs::core::SolveStatus::kConverged || result.status == lcs::core::SolveStatus::kMaxIterations ||
-         result.status == lcs::core::SolveStatus::kTimeBudget;
-}
-
-bool allFinite(const lcs::ConstraintForces& forces) {
-  for (const lcs::ContactForce& f : forces.forces) {
-    if (!std::isfinite(f.normal_force) || !std::isfinite(f.tangent1_force) || !std::isfinite(f.tangent2_force) ||
-        !finite(f.force) || !finite(f.position) || !finite(f.normal) || !finite(f.tangent1) || !finite(f.tangent2))
-      return false;
-    for (double v : f.lambda)
-      if (!std::isfinite(v)) return false;
-  }
-  for (const lcs::BodyPairWrench& w : forces.wrenches)
-    if (!finite(w.wrench.force) || !finite(w.wrench.torque)) return false;
-  return true;
-}
-
-bool allFinite(const lcs::SolverStats& stats) {
-  return std::isfinite(stats.residual) && std::isfinite(stats.solver_error) && std::isfinite(stats.solve_time);
 }
 
 }  // namespace lcp_contact_solver_ros

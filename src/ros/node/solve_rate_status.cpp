@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/solve_rate_status.h"
+#include "lcp_contact_solver/ros/node/solve_rate_status.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 

@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include "lcp_contact_solver/core/solver_param_table.h"
 
@@ -104,7 +104,7 @@ std::string validateDisplay(const DisplayOptions& d) {
 lcs::core::SolverParams defaultSolverParams() {
   lcs::core::SolverParams params;  // SOFA's defaults, then the node's own (node_param_defaults.def)
 #define LCS_NODE_DEFAULT(name, value) lcs::core::setParam(&params, #name, value);
-#include "lcp_contact_solver/ros/node_param_defaults.def"
+#include "lcp_contact_solver/ros/node/node_param_defaults.def"
 #undef LCS_NODE_DEFAULT
   return params;
 }
@@ -118,7 +118,7 @@ std::string readNodeParams(const ros::NodeHandle& pnh, NodeSettings* s) {
 #define LCS_NODE_BOOL(name, member, def, group, doc) readParam(pnh, #name, &s->member),
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) readVec3(pnh, #name, &s->member),
 #define LCS_NODE_ENUM(name, member, def, group, doc) readEnum(pnh, #name, &s->member),
-#include "lcp_contact_solver/ros/node_param_table.def"
+#include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
 #undef LCS_NODE_BOOL
@@ -214,7 +214,7 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
   LCS_IN_CONFIG_##group(c.name##_x = s.member[0], c.name##_y = s.member[1], c.name##_z = s.member[2];)
 #define LCS_NODE_ENUM(name, member, def, group, doc)
-#include "lcp_contact_solver/ros/node_param_table.def"
+#include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
 #undef LCS_NODE_BOOL
@@ -240,7 +240,7 @@ std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSet
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
   LCS_IN_CONFIG_##group(next.member = {{c.name##_x, c.name##_y, c.name##_z}};)
 #define LCS_NODE_ENUM(name, member, def, group, doc)
-#include "lcp_contact_solver/ros/node_param_table.def"
+#include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
 #undef LCS_NODE_BOOL

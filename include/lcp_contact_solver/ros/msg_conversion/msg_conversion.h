@@ -4,6 +4,11 @@
 // msg_primitives.h). Every function that reads a message validates it and returns an empty
 // string on success or one sentence naming the first fault, so a malformed message never
 // reaches the solver.
+//
+// Implemented in src/ros/msg_conversion/ by what is converted: contact_point.cpp (one
+// contact's type and frame), problem_from_msgs.cpp (ContactArray + Compliance → Problem),
+// problem_to_msgs.cpp (Problem → ContactArray, Compliance), result_msgs.cpp (SolveResult →
+// ConstraintForces, SolverStats).
 #pragma once
 
 #include "lcp_contact_solver/core/contact_frame.h"
@@ -31,7 +36,7 @@ namespace lcs = ::lcp_contact_solver;
 using lcs::core::ContactFrame;
 
 // The one mapping between the core's contact types and ContactPoint's type constants (the
-// numbers agree by design; msg_conversion.cpp asserts it at compile time).
+// numbers agree by design; contact_point.cpp asserts it at compile time).
 std::uint8_t toMsgType(lcs::core::ContactType type);
 // Only for a type code that contactRows-style validation accepted (0..4).
 lcs::core::ContactType fromMsgType(std::uint8_t type);

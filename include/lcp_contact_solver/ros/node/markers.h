@@ -5,8 +5,8 @@
 
 #include "lcp_contact_solver/core/problem.h"
 #include "lcp_contact_solver/core/solve_result.h"
-#include "lcp_contact_solver/ros/msg_conversion.h"
-#include "lcp_contact_solver/ros/solver_params_ros.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <std_msgs/ColorRGBA.h>
 #include <std_msgs/Header.h>

@@ -1,4 +1,4 @@
-#include "lcp_contact_solver/ros/cycle_log.h"
+#include "lcp_contact_solver/ros/node/cycle_log.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
