@@ -3,7 +3,6 @@
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
-#include "lcp_contact_solver/core/contact_solver.h"
 
 #include <Eigen/Core>
 

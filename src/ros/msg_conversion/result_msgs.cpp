@@ -2,7 +2,6 @@
 // before publishing them.
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
-#include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion/msg_primitives.h"
 
 #include <Eigen/Geometry>
