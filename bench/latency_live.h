@@ -44,6 +44,9 @@ struct Tracker {
   std::map<std::string, long> statuses;
 
   void reset();
+  // The pending request of this stamp, its `answer` now marked as come; end() when unknown
+  // or already answered (a late or repeated message). The caller holds m.
+  std::map<std::uint64_t, Pending>::iterator claim(std::uint64_t stamp, bool Pending::*answer);
   void onForces(const lcs::ConstraintForces::ConstPtr& f);
   void onStats(const lcs::SolverStats::ConstPtr& s);
   // Requests older than `timeout` are given up (lost in a queue).

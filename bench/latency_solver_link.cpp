@@ -29,12 +29,18 @@ void Tracker::reset() {
   statuses.clear();
 }
 
+std::map<std::uint64_t, Pending>::iterator Tracker::claim(std::uint64_t stamp, bool Pending::*answer) {
+  auto it = pending.find(stamp);
+  if (it == pending.end() || it->second.*answer) return pending.end();
+  it->second.*answer = true;
+  return it;
+}
+
 void Tracker::onForces(const lcs::ConstraintForces::ConstPtr& f) {
   const auto now = Clock::now();
   std::lock_guard<std::mutex> lock(m);
-  auto it = pending.find(f->header.stamp.toNSec());
-  if (it == pending.end() || it->second.forces) return;
-  it->second.forces = true;
+  const auto it = claim(f->header.stamp.toNSec(), &Pending::forces);
+  if (it == pending.end()) return;
   it->second.lat_forces = std::chrono::duration<double>(now - it->second.sent).count();
   lat_forces.push_back(it->second.lat_forces);
   --in_flight;
@@ -46,9 +52,8 @@ void Tracker::onForces(const lcs::ConstraintForces::ConstPtr& f) {
 void Tracker::onStats(const lcs::SolverStats::ConstPtr& s) {
   const auto now = Clock::now();
   std::lock_guard<std::mutex> lock(m);
-  auto it = pending.find(s->header.stamp.toNSec());
-  if (it == pending.end() || it->second.stats) return;
-  it->second.stats = true;
+  const auto it = claim(s->header.stamp.toNSec(), &Pending::stats);
+  if (it == pending.end()) return;
   lat_stats.push_back(std::chrono::duration<double>(now - it->second.sent).count());
   if (s->success) {  // a dropped or unpaired array has no solve (solve_time 0)
     solve_time.push_back(s->solve_time);
