@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Per-family auto regret from a work_precision CSV (the rule of writeRegret in
-work_precision.cpp: a row reached a tolerance when its residual is <= it and it converged,
+auto_regret_table.cpp: a row reached a tolerance when its residual is <= it and it converged,
 or is a direct / iteration-capped row). Siconos here = best of its fc3d and LCP methods.
 
     bench/auto_regret_families.py bench/results/work_precision_auto.csv

@@ -1,6 +1,6 @@
-// Peer solvers measured by the benchmark (bench/work_precision.cpp): solvers of other
-// projects installed from Debian, behind one small interface so the driver times them the
-// way it times ours. Each adapter converts our Problem once (prepare, not timed) and then
+// Peer solvers measured by the benchmark (bench/work_precision.cpp; runPeer in
+// work_precision_runs.cpp times them): solvers of other projects installed from Debian,
+// behind one small interface so the driver times them the way it times ours. Each adapter converts our Problem once (prepare, not timed) and then
 // solves from zero (solve, timed). Their answers are judged by our residual, never by their
 // own report (kept in PeerOutcome::self_error for the CSV).
 #pragma once
