@@ -2,7 +2,8 @@
 // ROS-free; a benchmark, never a test.
 //
 //   scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps 3]
-//                 [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--rounds 3] [--array-mb 512] [--out FILE.csv]
+//                 [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--rounds 3] [--array-mb 512]
+//                 [--copies 4] [--threads 0] [--out FILE.csv]
 //
 // Problems: bench/scene_problems.h (brick pyramids, box_stack's bodies, ~4 k² contacts for k
 // bricks at the base; sphere piles, sphere_pile's balls), taken after --pyramid-steps /
@@ -12,6 +13,12 @@
 //                 exceeds --dense-max-gb: the CSV says "skipped")
 //   block_sparse  the scene's W
 //   unbuilt       the body form (Problem::bodies, SolverParams::build_lcp = false): no W
+//   scalar_rows   the same contacts frictionless, W's normal rows as 1×1 blocks: the
+//                 one-row problem the scalar-row sweep (core/kernels/scalar_rows.h) runs on
+//                 (pgs for the sweeps, auto to the tolerances)
+// With --copies K > 1 every problem is also taken K times side by side (box_pyramid_B16x4:
+// K independent islands, a block-diagonal W), its block_sparse and scalar_rows forms measured
+// with islands on (each island its own stopping test, --threads threads) and off.
 // Per form: bytes of the compliance, time per nlgs sweep (25 sweeps from a cold start, SOFA
 // rule at an unreachable tolerance: the whole solve / 25, and the marginal sweep (t(25) -
 // t(5)) / 20 with the setup t(5) - 5 marginal sweeps; timing_util.h sweepRound), and time to a
@@ -30,6 +37,7 @@
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/islands.h"
 
 #include <unistd.h>
 
@@ -57,13 +65,16 @@ struct Options {
   double budget = 5.0;
   int rounds = 3;
   int array_mb = 512;
+  int copies = 4;   // > 1: each problem also K times side by side (islands)
+  int threads = 0;  // island threads (0 = the core count)
   std::string out = "bench/results/scaling.csv";
 };
 
 int usage(int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
-               "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB] [--out FILE.csv]\n");
+               "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB]\n"
+               "                     [--copies K] [--threads N] [--out FILE.csv]\n");
   return code;
 }
 
@@ -111,6 +122,64 @@ std::string ms(double s) {
   return b;
 }
 
+// The same contacts frictionless on their normal rows: one row each, W's normal-normal
+// entries as 1×1 blocks, d_free's normal rows.
+lcs::core::Problem normalRowsOnly(const lcs::core::Problem& p) {
+  const auto& W = std::get<lcs::core::BlockSparseMatrix>(p.W);
+  const int nc = static_cast<int>(p.contacts.size());
+  const std::vector<int> offsets = p.rowOffsets();
+  lcs::core::Problem out;
+  out.name = p.name + "_normals";
+  out.contacts = p.contacts;
+  for (lcs::core::Contact& c : out.contacts) {
+    c.type = lcs::core::ContactType::kFrictionless;
+    c.rows = 1;
+  }
+  out.d_free.resize(nc);
+  for (int i = 0; i < nc; ++i) out.d_free[i] = p.d_free[offsets[i]];
+  auto R = lcs::core::BlockSparseMatrix::withBlockSizes(std::vector<int>(nc, 1));
+  for (int i = 0; i < W.blockCount(); ++i) {
+    R.beginRow();
+    for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s)
+      R.addBlock(W.block_col[s], Eigen::MatrixXd::Constant(1, 1, W.values[W.value_start[s]]));
+  }
+  out.W = std::move(R);
+  return out;
+}
+
+// `k` copies of a block-sparse problem side by side: a block-diagonal W, ids kept apart.
+lcs::core::Problem disjointCopies(const lcs::core::Problem& p, int k) {
+  const auto& W = std::get<lcs::core::BlockSparseMatrix>(p.W);
+  const int nb = W.blockCount();
+  std::int64_t id_span = 1;
+  for (const lcs::core::Contact& c : p.contacts) id_span = std::max(id_span, c.id + 1);
+  lcs::core::Problem out;
+  out.name = p.name + "x" + std::to_string(k);
+  std::vector<int> sizes;
+  for (int c = 0; c < k; ++c)
+    for (const lcs::core::Contact& contact : p.contacts) {
+      out.contacts.push_back(contact);
+      out.contacts.back().id = contact.id + c * id_span;
+      sizes.push_back(contact.rows);
+    }
+  out.d_free = p.d_free.replicate(k, 1);
+  auto R = lcs::core::BlockSparseMatrix::withBlockSizes(sizes);
+  for (int c = 0; c < k; ++c)
+    for (int i = 0; i < nb; ++i) {
+      R.beginRow();
+      const int rows = W.block_offset[i + 1] - W.block_offset[i];
+      for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s) {
+        const int j = W.block_col[s];
+        const int cols = W.block_offset[j + 1] - W.block_offset[j];
+        const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> block(
+            W.values.data() + W.value_start[s], rows, cols);
+        R.addBlock(j + c * nb, block);
+      }
+    }
+  out.W = std::move(R);
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -128,6 +197,8 @@ int main(int argc, char** argv) {
     else if (a == "--budget") o.budget = std::stod(v);
     else if (a == "--rounds") o.rounds = std::stoi(v);
     else if (a == "--array-mb") o.array_mb = std::stoi(v);
+    else if (a == "--copies") o.copies = std::stoi(v);
+    else if (a == "--threads") o.threads = std::stoi(v);
     else if (a == "--out") o.out = v;
     else return usage(2);
   }
@@ -144,7 +215,8 @@ int main(int argc, char** argv) {
 
   csv << "problem,family,bodies,contacts,rows,form,w_bytes,setup_ms,sweeps,us_per_sweep,us_marginal_sweep,"
          "ns_per_row_sweep,bandwidth_gbs,read_w_us,sweep_over_read_w,marginal_over_read_w,t_1e-4_ms,it_1e-4,solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
-         "solver_1e-6,status_1e-6,residual_1e-6,penetrating_contacts,setup_without_erp_ms,load1\n";
+         "solver_1e-6,status_1e-6,residual_1e-6,penetrating_contacts,setup_without_erp_ms,load1,islands,island_count,"
+         "w_bytes_per_contact\n";
 
   std::vector<lcs_bench::SceneProblem> problems;
   const auto t_gen = Clock::now();
@@ -160,11 +232,24 @@ int main(int argc, char** argv) {
                  secondsSince(t_gen));
     problems.push_back(std::move(p[0]));
   }
+  // Islands: each problem K times side by side (block-sparse only: the body form and the dense
+  // W of a copy are the same story as the original's).
+  const std::size_t originals = problems.size();
+  for (std::size_t i = 0; i < originals && o.copies > 1; ++i) {
+    lcs_bench::SceneProblem copy;
+    copy.name = problems[i].name + "x" + std::to_string(o.copies);
+    copy.scene = problems[i].scene;
+    copy.bodies = problems[i].bodies * o.copies;
+    copy.steps = problems[i].steps;
+    copy.problem = disjointCopies(problems[i].problem, o.copies);
+    problems.push_back(std::move(copy));
+  }
 
-  std::printf("\n| problem | contacts | rows | form | W bytes | setup (erp = 0) | µs/sweep | marginal µs/sweep | "
-              "ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
-              "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (lcs_bench::SceneProblem& sp : problems) {
+  std::printf("\n| problem | contacts | rows | form | W bytes | W bytes / contact | setup (erp = 0) | µs/sweep | "
+              "marginal µs/sweep | ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
+              "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (std::size_t pi = 0; pi < problems.size(); ++pi) {
+    lcs_bench::SceneProblem& sp = problems[pi];
     const lcs::core::Problem& sparse = sp.problem;
     const int nc = static_cast<int>(sparse.contacts.size()), rows = sparse.rowCount();
     if (nc == 0) continue;
@@ -173,23 +258,31 @@ int main(int argc, char** argv) {
       std::string name;
       const lcs::core::Problem* problem;
       bool build_lcp;
+      bool islands = true;
     };
+    const bool copies = pi >= originals;  // the side-by-side copies come after the originals
     lcs::core::Problem dense;
     const double dense_bytes = static_cast<double>(rows) * rows * sizeof(double);
-    const bool do_dense = dense_bytes <= o.dense_max_gb * 1e9;
+    const bool do_dense = dense_bytes <= o.dense_max_gb * 1e9 && !copies;
     std::vector<Form> forms;
     if (do_dense) {
       dense = sparse;
       dense.W = std::get<lcs::core::BlockSparseMatrix>(sparse.W).toDense();
       forms.push_back({"dense", &dense, true});
-    } else {
+    } else if (!copies) {
       csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense," << num(dense_bytes)
-          << ",,,,,,,,,,,,,skipped,,,,skipped,,,," << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
-      std::printf("| %s | %d | %d | dense | %s | skipped (W > %.1f GB) | | | | | | |\n", sp.name.c_str(), nc, rows,
-                  human(dense_bytes).c_str(), o.dense_max_gb);
+          << ",,,,,,,,,,,,,skipped,,,,skipped,,,," << num(lcs_bench::loadAverage1(), "%.2f") << ",,,\n";
+      std::printf("| %s | %d | %d | dense | %s | %.0f | skipped (W > %.1f GB) | | | | | | |\n", sp.name.c_str(), nc,
+                  rows, human(dense_bytes).c_str(), dense_bytes / nc, o.dense_max_gb);
     }
+    const lcs::core::Problem normals = normalRowsOnly(sparse);
     forms.push_back({"block_sparse", &sparse, true});
     if (sp.body_form.bodies) forms.push_back({"unbuilt", &sp.body_form, false});
+    forms.push_back({"scalar_rows", &normals, true});
+    if (copies) {
+      forms.push_back({"block_sparse", &sparse, true, false});
+      forms.push_back({"scalar_rows", &normals, true, false});
+    }
     // The same problems without position correction (every contact's erp = 0): ContactSolver
     // then solves the problem as given instead of a stabilized copy of it (W included), so the
     // setup difference is what that copy costs per solve.
@@ -210,11 +303,15 @@ int main(int argc, char** argv) {
       lcs::core::SolverParams params;
       params.solver = lcs::core::SolverKind::kNlgs;
       params.build_lcp = forms[i].build_lcp;
+      params.islands = forms[i].islands;
+      params.threads = o.threads;
       lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
       if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
       for (int k = 0; k < 2; ++k) {
         lcs::core::SolverParams p = lcs_bench::toleranceParams(lcs::core::SolverKind::kAuto, tols[k], o.budget, 1000000);
         p.build_lcp = forms[i].build_lcp;
+        p.islands = forms[i].islands;
+        p.threads = o.threads;
         lcs_bench::solveRound(*forms[i].problem, p, &tol_acc[i][k]);
       }
     });
@@ -239,13 +336,15 @@ int main(int argc, char** argv) {
         csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver << ','
             << lcs::core::statusName(tol[k].result.status) << ',';
       csv << num(tol[1].result.residual) << ',' << penetrating << ',' << num(1e3 * plain_setup) << ','
-          << num(lcs_bench::loadAverage1(), "%.2f") << '\n';
+          << num(lcs_bench::loadAverage1(), "%.2f") << ',' << (f.islands ? "on" : "off") << ','
+          << lcs::core::findIslands(*f.problem).count() << ',' << num(bytes / nc) << '\n';
       csv.flush();
       auto cell = [](double v, const char* fmt) { return std::isfinite(v) ? num(v, fmt) : std::string("–"); };
       const std::string setup_text = (std::isfinite(st.setup) ? ms(st.setup) : std::string("–")) + " (" +
                                      (std::isfinite(plain_setup) ? ms(plain_setup) : std::string("–")) + ")";
-      std::printf("| %s | %d | %d | %s | %s | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n",
-                  sp.name.c_str(), nc, rows, f.name.c_str(), human(bytes).c_str(), setup_text.c_str(),
+      const std::string form_text = f.name + (copies ? (f.islands ? ", islands on" : ", islands off") : "");
+      std::printf("| %s | %d | %d | %s | %s | %.0f | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n",
+                  sp.name.c_str(), nc, rows, form_text.c_str(), human(bytes).c_str(), bytes / nc, setup_text.c_str(),
                   cell(1e6 * st.per_sweep, "%.1f").c_str(),
                   cell(1e6 * st.marginal, "%.1f").c_str(), cell(1e9 * st.per_sweep / rows, "%.1f").c_str(),
                   cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(), tol[0].result.solver.c_str(),
