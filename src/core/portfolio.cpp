@@ -156,6 +156,10 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
     // kAutoLemkeRows, cheap.
     if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
     if (f.symmetric && f.coupling < kAutoDominant) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
+    // Symmetric but coupled: a convex QP, where newton's active-set path (one Cholesky per
+    // step, many active-set changes per step) ends in a few steps; Lemke changes one variable
+    // per O(n²) pivot.
+    if (f.symmetric) return {K::kNewton, K::kLemke, K::kPgs, K::kApgd};
     return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
   }
   if (pyramidModel(p)) return {K::kPgs, K::kLemke};

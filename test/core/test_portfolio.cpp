@@ -221,6 +221,23 @@ TEST(Portfolio, FirstMemberFollowsTheFeatures) {
   EXPECT_TRUE(t.converged) << t.message;
 }
 
+// A frictionless stack (μ = 0: one normal row per contact) has a symmetric, coupled W: a
+// convex QP, which newton's active-set path ends in a few Cholesky steps, so auto starts
+// there. The same W made non-symmetric is no QP: Lemke's pivoting goes first.
+TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
+  const Problem stack = boxStack(3, 4, 1.0, 0.5, 0.0);
+  const SolveResult r = solveProblem(stack, params(SolverKind::kAuto, 1e-8, 5000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver.rfind("auto:newton", 0), 0u) << r.solver;
+  EXPECT_LE(recomputedResidual(stack, r), 1e-8);
+  Problem skewed = stack;
+  Eigen::MatrixXd W = toDense(skewed.W);
+  W(0, 3) += 0.1 * W(0, 0);  // normal rows 0 and 1 (rows 0 and 3), one side only
+  skewed.W = W;
+  const SolveResult s = solveProblem(skewed, params(SolverKind::kAuto, 1e-8, 5000));
+  EXPECT_EQ(s.solver.rfind("auto:lemke", 0), 0u) << s.solver;
+}
+
 TEST(Portfolio, ProxIsANamedSolver) {
   SolverKind kind;
   ASSERT_TRUE(parseSolverName("prox", &kind));
