@@ -56,7 +56,10 @@ Cells collectCells(const Options& opt, const std::vector<Row>& rows, std::vector
       Cell& c = cells[{key, tol}];
       if (r.solver == "auto") {
         c.auto_ran = c.auto_ran || !std::isnan(r.time_median);
-        if (reached(r, tol)) { c.auto_time = r.time_median; c.auto_ok = true; }
+        if (reached(r, tol)) {
+          c.auto_time = r.time_median;
+          c.auto_ok = true;
+        }
         continue;
       }
       if (!reached(r, tol)) continue;
@@ -66,7 +69,8 @@ Cells collectCells(const Options& opt, const std::vector<Row>& rows, std::vector
           if (name) *name = r.solver;
         }
       };
-      if (own_names.count(r.solver)) better(c.own, &c.own_name);
+      if (own_names.count(r.solver))
+        better(c.own, &c.own_name);
       else {
         better(c.peer, &c.peer_name);
         if (r.solver.rfind("siconos", 0) == 0) better(c.siconos, nullptr);
@@ -76,10 +80,12 @@ Cells collectCells(const Options& opt, const std::vector<Row>& rows, std::vector
   return cells;
 }
 
-void writeSummary(std::ostream& md, const Options& opt, const Cells& cells, const std::vector<std::string>& order) {
+void writeSummary(std::ostream& md, const Options& opt, const Cells& cells,
+                  const std::vector<std::string>& order) {
   md << "Summary per tolerance (geometric means over the problems where both sides reached it;\n"
         "\"auto missed\" counts problems some own solver solved and auto did not):\n\n"
-        "| tolerance | problems | auto / fastest own: geo mean | max | > 1.5x | auto missed | auto / best Siconos: geo mean (n) | Siconos solved, auto not | auto / fastest peer: geo mean (n) |\n"
+        "| tolerance | problems | auto / fastest own: geo mean | max | > 1.5x | auto missed | auto / best "
+        "Siconos: geo mean (n) | Siconos solved, auto not | auto / fastest peer: geo mean (n) |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   for (double tol : opt.tolerances) {
     std::vector<double> own, sic, peer;
@@ -91,7 +97,8 @@ void writeSummary(std::ostream& md, const Options& opt, const Cells& cells, cons
       const Cell& c = it->second;
       ++problems;
       if (!std::isnan(c.own)) {
-        if (!c.auto_ok) ++missed;
+        if (!c.auto_ok)
+          ++missed;
         else {
           const double q = c.auto_time / c.own;
           own.push_back(q);
@@ -100,18 +107,21 @@ void writeSummary(std::ostream& md, const Options& opt, const Cells& cells, cons
         }
       }
       if (!std::isnan(c.siconos)) {
-        if (c.auto_ok) sic.push_back(c.auto_time / c.siconos);
-        else ++sic_missed;
+        if (c.auto_ok)
+          sic.push_back(c.auto_time / c.siconos);
+        else
+          ++sic_missed;
       }
       if (!std::isnan(c.peer) && c.auto_ok) peer.push_back(c.auto_time / c.peer);
     }
-    md << "| " << fmt(tol) << " | " << problems << " | " << fmt(geomean(own)) << " | " << fmt(worst) << " | " << over
-       << " | " << missed << " | " << fmt(geomean(sic)) << " (" << sic.size() << ") | " << sic_missed << " | "
-       << fmt(geomean(peer)) << " (" << peer.size() << ") |\n";
+    md << "| " << fmt(tol) << " | " << problems << " | " << fmt(geomean(own)) << " | " << fmt(worst) << " | "
+       << over << " | " << missed << " | " << fmt(geomean(sic)) << " (" << sic.size() << ") | " << sic_missed
+       << " | " << fmt(geomean(peer)) << " (" << peer.size() << ") |\n";
   }
 }
 
-void writePerProblem(std::ostream& md, const Options& opt, const Cells& cells, const std::vector<std::string>& order) {
+void writePerProblem(std::ostream& md, const Options& opt, const Cells& cells,
+                     const std::vector<std::string>& order) {
   md << "\nPer problem: auto / fastest own solver (that solver), \"-\" where no own solver reached the\n"
         "tolerance, \"MISS\" where one did and auto did not.\n\n| problem |";
   for (double tol : opt.tolerances) md << ' ' << fmt(tol) << " |";
@@ -128,9 +138,15 @@ void writePerProblem(std::ostream& md, const Options& opt, const Cells& cells, c
     md << "| " << key << " |";
     for (double tol : opt.tolerances) {
       const auto it = cells.find({key, tol});
-      if (it == cells.end() || std::isnan(it->second.own)) { md << " - |"; continue; }
+      if (it == cells.end() || std::isnan(it->second.own)) {
+        md << " - |";
+        continue;
+      }
       const Cell& c = it->second;
-      if (!c.auto_ok) { md << " MISS (" << c.own_name << ") |"; continue; }
+      if (!c.auto_ok) {
+        md << " MISS (" << c.own_name << ") |";
+        continue;
+      }
       char buf[64];
       std::snprintf(buf, sizeof buf, " %.2f (%s) |", c.auto_time / c.own, c.own_name.c_str());
       md << buf;

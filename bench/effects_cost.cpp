@@ -71,9 +71,10 @@ struct Options {
 };
 
 int usage(int code) {
-  std::fprintf(code ? stderr : stdout,
-               "usage: effects_cost [--bases 5,9,16] [--balls 40,120,350] [--steps 30] [--gen-balls 100,400]\n"
-               "                    [--budget S] [--rounds N] [--torsional M] [--rolling M] [--out FILE.csv]\n");
+  std::fprintf(
+      code ? stderr : stdout,
+      "usage: effects_cost [--bases 5,9,16] [--balls 40,120,350] [--steps 30] [--gen-balls 100,400]\n"
+      "                    [--budget S] [--rounds N] [--torsional M] [--rolling M] [--out FILE.csv]\n");
   return code;
 }
 
@@ -85,16 +86,26 @@ int parseOptions(int argc, char** argv, Options* options) {
     if (a == "--help" || a == "-h") return usage(0);
     if (i + 1 >= argc) return usage(2);
     const std::string v = argv[++i];
-    if (a == "--bases") o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls") o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--gen-balls") o.gen_balls = lcs_bench::parseIntList(v);
-    else if (a == "--steps") o.steps = std::stoi(v);
-    else if (a == "--budget") o.budget = std::stod(v);
-    else if (a == "--rounds") o.rounds = std::stoi(v);
-    else if (a == "--torsional") o.torsional = std::stod(v);
-    else if (a == "--rolling") o.rolling = std::stod(v);
-    else if (a == "--out") o.out = v;
-    else return usage(2);
+    if (a == "--bases")
+      o.bases = lcs_bench::parseIntList(v);
+    else if (a == "--balls")
+      o.balls = lcs_bench::parseIntList(v);
+    else if (a == "--gen-balls")
+      o.gen_balls = lcs_bench::parseIntList(v);
+    else if (a == "--steps")
+      o.steps = std::stoi(v);
+    else if (a == "--budget")
+      o.budget = std::stod(v);
+    else if (a == "--rounds")
+      o.rounds = std::stoi(v);
+    else if (a == "--torsional")
+      o.torsional = std::stod(v);
+    else if (a == "--rolling")
+      o.rolling = std::stod(v);
+    else if (a == "--out")
+      o.out = v;
+    else
+      return usage(2);
   }
   return -1;
 }
@@ -111,7 +122,8 @@ bool generateProblems(const Options& o, std::vector<lcs_bench::SceneProblem>* pr
     return false;
   }
   std::filesystem::remove_all(dir);
-  std::fprintf(stderr, "generated %zu problems (6-row contacts) in %.1f s\n", problems->size(), secondsSince(t_gen));
+  std::fprintf(stderr, "generated %zu problems (6-row contacts) in %.1f s\n", problems->size(),
+               secondsSince(t_gen));
   return true;
 }
 
@@ -139,7 +151,8 @@ int main(int argc, char** argv) {
     for (const lcs::core::Contact& c : sp.problem.contacts)
       if (c.rows != 6) throw std::runtime_error(sp.name + ": a contact without 6 rows");
     names.push_back(sp.name);
-    ec::measureProblem(sp.name, ec::variantsOf(sp.problem, o.torsional, o.rolling), o.budget, o.rounds, csv, &tables);
+    ec::measureProblem(sp.name, ec::variantsOf(sp.problem, o.torsional, o.rolling), o.budget, o.rounds, csv,
+                       &tables);
   }
   ec::printSolveTables(names, tables);
 

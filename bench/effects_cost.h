@@ -46,8 +46,8 @@ struct SolveTables {
 };
 
 // Every measurement of every variant of one problem, in `rounds` interleaved rounds.
-void measureProblem(const std::string& problem_name, const std::vector<Variant>& variants, double budget, int rounds,
-                    std::ostream& csv, SolveTables* tables);
+void measureProblem(const std::string& problem_name, const std::vector<Variant>& variants, double budget,
+                    int rounds, std::ostream& csv, SolveTables* tables);
 
 struct GenTiming {
   double generate = 0.0, build = 0.0, step = 0.0, step_solve = 0.0;  // s per call (fastest)
@@ -71,9 +71,15 @@ int frictionlessCount(const lcs::core::Problem& p);
 struct CsvRow {
   CsvRow(std::string section_, std::string problem_, std::string variant_, int contacts_, int rows_,
          int frictionless_, std::string solver_, std::string ran_, std::string mode_)
-      : section(std::move(section_)), problem(std::move(problem_)), variant(std::move(variant_)),
-        contacts(contacts_), rows(rows_), frictionless(frictionless_), solver(std::move(solver_)),
-        ran(std::move(ran_)), mode(std::move(mode_)) {}
+      : section(std::move(section_)),
+        problem(std::move(problem_)),
+        variant(std::move(variant_)),
+        contacts(contacts_),
+        rows(rows_),
+        frictionless(frictionless_),
+        solver(std::move(solver_)),
+        ran(std::move(ran_)),
+        mode(std::move(mode_)) {}
   std::string section, problem, variant;
   int contacts = 0, rows = 0, frictionless = 0;
   std::string solver, ran, mode;

@@ -23,11 +23,14 @@ struct ToTol {
   lcs::core::SolverKind kind;
   double tol;
 };
-const ToTol kToTol[] = {{lcs::core::SolverKind::kNlgs, 1e-4}, {lcs::core::SolverKind::kAuto, 1e-4}, {lcs::core::SolverKind::kAuto, 1e-6}};
+const ToTol kToTol[] = {{lcs::core::SolverKind::kNlgs, 1e-4},
+                        {lcs::core::SolverKind::kAuto, 1e-4},
+                        {lcs::core::SolverKind::kAuto, 1e-6}};
 const lcs::core::SolverKind kSweepSolvers[] = {lcs::core::SolverKind::kNlgs, lcs::core::SolverKind::kAuto};
 
 // The figures of one variant: CSV rows, and the values of the printed tables.
-void recordVariant(const std::string& problem_name, const Variant& v, const std::array<lcs_bench::SweepAcc, 2>& sweeps,
+void recordVariant(const std::string& problem_name, const Variant& v,
+                   const std::array<lcs_bench::SweepAcc, 2>& sweeps,
                    const std::array<lcs_bench::SolveAcc, 3>& to_tol, std::ostream& csv, SolveTables* tables) {
   const lcs::core::Problem& p = v.problem;
   const int rows = p.rowCount(), nc = static_cast<int>(p.contacts.size()), nf = frictionlessCount(p);
@@ -37,7 +40,8 @@ void recordVariant(const std::string& problem_name, const Variant& v, const std:
   tab["rows"] = rows;
   for (int k = 0; k < 2; ++k) {
     const lcs_bench::SweepTiming st = lcs_bench::sweepTiming(sweeps[k]);
-    CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::core::solverName(kSweepSolvers[k]), st.solver, "per_sweep"};
+    CsvRow r{"solve",   problem_name, v.name, nc, rows, nf, lcs::core::solverName(kSweepSolvers[k]),
+             st.solver, "per_sweep"};
     r.iterations = st.sweeps;
     r.seconds = st.per_sweep * st.sweeps;
     r.us_per_sweep = 1e6 * st.per_sweep;
@@ -51,15 +55,16 @@ void recordVariant(const std::string& problem_name, const Variant& v, const std:
   }
   for (int k = 0; k < 3; ++k) {
     const lcs_bench::SolveAcc& a = to_tol[k];
-    CsvRow r{"solve", problem_name, v.name, nc, rows, nf, lcs::core::solverName(kToTol[k].kind), a.result.solver,
-             "to_tolerance"};
+    CsvRow r{"solve",         problem_name,  v.name, nc, rows, nf, lcs::core::solverName(kToTol[k].kind),
+             a.result.solver, "to_tolerance"};
     r.tolerance = kToTol[k].tol;
     r.iterations = a.result.iterations;
     r.seconds = a.best;
     r.residual = a.result.residual;
     r.status = lcs::core::statusName(a.result.status);
     csvWrite(csv, r);
-    const std::string key = std::string(lcs::core::solverName(kToTol[k].kind)) + "@" + num(kToTol[k].tol, "%.0e");
+    const std::string key =
+        std::string(lcs::core::solverName(kToTol[k].kind)) + "@" + num(kToTol[k].tol, "%.0e");
     tab["t_" + key] = a.result.converged ? 1e3 * a.best : std::nan("");
     tab["it_" + key] = a.result.iterations;
     ran["t_" + key] = a.result.solver;
@@ -122,8 +127,8 @@ int frictionlessCount(const lcs::core::Problem& p) {
   return n;
 }
 
-void measureProblem(const std::string& problem_name, const std::vector<Variant>& variants, double budget, int rounds,
-                    std::ostream& csv, SolveTables* tables) {
+void measureProblem(const std::string& problem_name, const std::vector<Variant>& variants, double budget,
+                    int rounds, std::ostream& csv, SolveTables* tables) {
   const int sweeps = 20;  // 5 + 20 sweeps from a cold start: the early sweeps, where contacts still move
   const std::size_t nv = variants.size();
   std::vector<std::array<lcs_bench::SweepAcc, 2>> sweep_acc(nv);
@@ -135,10 +140,12 @@ void measureProblem(const std::string& problem_name, const std::vector<Variant>&
       lcs_bench::sweepRound(variants[i].problem, params, sweeps, &sweep_acc[i][k]);
     }
     for (int k = 0; k < 3; ++k)
-      lcs_bench::solveRound(variants[i].problem, lcs_bench::toleranceParams(kToTol[k].kind, kToTol[k].tol, budget, 100000),
+      lcs_bench::solveRound(variants[i].problem,
+                            lcs_bench::toleranceParams(kToTol[k].kind, kToTol[k].tol, budget, 100000),
                             &tol_acc[i][k]);
   });
-  for (std::size_t i = 0; i < nv; ++i) recordVariant(problem_name, variants[i], sweep_acc[i], tol_acc[i], csv, tables);
+  for (std::size_t i = 0; i < nv; ++i)
+    recordVariant(problem_name, variants[i], sweep_acc[i], tol_acc[i], csv, tables);
 }
 
 std::vector<GenRow> measureGeneration(const std::string& scenes_dir, int n, int reps) {
@@ -153,8 +160,9 @@ std::vector<GenRow> measureGeneration(const std::string& scenes_dir, int n, int 
 
   const sc::Scene disabled = withBallPairsDisabled(settled);
   const sc::Scene mixed = withHalfTouchingFrictionless(settled);
-  std::fprintf(stderr, "  pile of %d balls: %zu ball-ball pairs disabled; %zu friction_pairs with mu = 0 (mixed)\n", n,
-               disabled.params.disable_collisions.size(), mixed.params.friction_pairs.size());
+  std::fprintf(stderr,
+               "  pile of %d balls: %zu ball-ball pairs disabled; %zu friction_pairs with mu = 0 (mixed)\n",
+               n, disabled.params.disable_collisions.size(), mixed.params.friction_pairs.size());
   // Interleaved rounds; each time is the fastest over them.
   std::vector<GenRow> rows = {{"all_pairs", {}}, {"ball_ball_disabled", {}}, {"mixed_friction_pairs", {}}};
   const sc::Scene* scenes[3] = {&settled, &disabled, &mixed};

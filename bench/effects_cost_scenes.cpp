@@ -72,10 +72,10 @@ std::string pileUrdf(int n) {
   u.precision(17);
   u << "<?xml version=\"1.0\"?>\n<robot name=\"pile\">\n  <link name=\"world\"/>\n";
   auto wallBox = [&](const std::string& name, double sx, double sy, double x, double y) {
-    u << "  <link name=\"" << name << "\"><collision><geometry><box size=\"" << sx << " " << sy << " " << height
-      << "\"/></geometry></collision></link>\n  <joint name=\"" << name
-      << "_joint\" type=\"fixed\"><parent link=\"world\"/><child link=\"" << name << "\"/><origin xyz=\"" << x << " "
-      << y << " " << 0.5 * height << "\"/></joint>\n";
+    u << "  <link name=\"" << name << "\"><collision><geometry><box size=\"" << sx << " " << sy << " "
+      << height << "\"/></geometry></collision></link>\n  <joint name=\"" << name
+      << "_joint\" type=\"fixed\"><parent link=\"world\"/><child link=\"" << name << "\"/><origin xyz=\"" << x
+      << " " << y << " " << 0.5 * height << "\"/></joint>\n";
   };
   const double h = 0.5 * (inner + wall);
   wallBox("wall_north", inner + 2 * wall, wall, 0, h);
@@ -92,11 +92,12 @@ std::string pileUrdf(int n) {
         const double y = (j - 0.5 * (side - 1)) * pitch + shift + 0.003 * std::cos(2.3 * k);
         const double z = r + 0.002 + layer * 0.09;
         const std::string name = "ball_" + std::to_string(++k);
-        u << "  <link name=\"" << name << "\"><inertial><mass value=\"0.2\"/><inertia ixx=\"0.0002\" ixy=\"0\" "
+        u << "  <link name=\"" << name
+          << "\"><inertial><mass value=\"0.2\"/><inertia ixx=\"0.0002\" ixy=\"0\" "
           << "ixz=\"0\" iyy=\"0.0002\" iyz=\"0\" izz=\"0.0002\"/></inertial><collision><geometry><sphere "
           << "radius=\"0.05\"/></geometry></collision></link>\n  <joint name=\"" << name
-          << "_joint\" type=\"floating\"><parent link=\"world\"/><child link=\"" << name << "\"/><origin xyz=\"" << x
-          << " " << y << " " << z << "\"/></joint>\n";
+          << "_joint\" type=\"floating\"><parent link=\"world\"/><child link=\"" << name
+          << "\"/><origin xyz=\"" << x << " " << y << " " << z << "\"/></joint>\n";
       }
   }
   u << "</robot>\n";
@@ -110,7 +111,8 @@ sc::Scene withBallPairsDisabled(const sc::Scene& settled) {
     if (!b.is_static) balls.push_back(b.name);
   sc::Scene disabled = settled;
   for (std::size_t i = 0; i < balls.size(); ++i)
-    for (std::size_t j = i + 1; j < balls.size(); ++j) disabled.params.disable_collisions.emplace_back(balls[i], balls[j]);
+    for (std::size_t j = i + 1; j < balls.size(); ++j)
+      disabled.params.disable_collisions.emplace_back(balls[i], balls[j]);
   return disabled;
 }
 
@@ -124,7 +126,8 @@ sc::Scene withHalfTouchingFrictionless(const sc::Scene& settled) {
       touching.emplace(f.body_a, f.body_b);
   int k = 0;
   for (const auto& [a, b] : touching)
-    if (k++ % 2 == 0) mixed.params.friction_pairs.push_back({settled.bodies[a].name, settled.bodies[b].name, 0.0});
+    if (k++ % 2 == 0)
+      mixed.params.friction_pairs.push_back({settled.bodies[a].name, settled.bodies[b].name, 0.0});
   return mixed;
 }
 
@@ -138,7 +141,8 @@ std::string rollingScenesDir(double torsional, double rolling) {
     std::ifstream in(std::string(LCS_SCENES_DIR) + "/" + name);
     std::stringstream text;
     text << in.rdbuf();
-    if (text.str().find("torsional_friction") != std::string::npos || text.str().find("rolling_friction") != std::string::npos)
+    if (text.str().find("torsional_friction") != std::string::npos ||
+        text.str().find("rolling_friction") != std::string::npos)
       throw std::runtime_error(std::string(name) + " already sets torsional/rolling friction");
     std::ofstream out(dir + "/" + name);
     out << text.str() << "\ntorsional_friction: " << torsional << "\nrolling_friction: " << rolling << "\n";

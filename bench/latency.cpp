@@ -50,7 +50,8 @@ namespace {
 
 int usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: latency_bench [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] [--rate-seconds S]\n"
+               "usage: latency_bench [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] "
+               "[--rate-seconds S]\n"
                "               [--latency-seconds S]\n"
                "               [--inflight 1,4] [--pace HZ,...] [--pace-seconds S]\n"
                "               [--label NAME] [--solver-pid PID] [--in-process-nodelet]\n"
@@ -76,23 +77,40 @@ int parseOptions(int argc, char** argv, Options* options) {
     }
     if (i + 1 >= argc) return usage(2);
     const std::string v = argv[++i];
-    if (a == "--bases") o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls") o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--steps") o.steps = std::stoi(v);
-    else if (a == "--count") o.count = std::stoi(v);
-    else if (a == "--warmup") o.warmup = std::stoi(v);
-    else if (a == "--rate-seconds") o.rate_seconds = std::stod(v);
-    else if (a == "--latency-seconds") o.latency_seconds = std::stod(v);
-    else if (a == "--inflight") o.inflight = lcs_bench::parseIntList(v);
-    else if (a == "--pace") o.paces = lcs_bench::parseIntList(v);
-    else if (a == "--pace-seconds") o.pace_seconds = std::stod(v);
-    else if (a == "--label") o.label = v;
-    else if (a == "--solver-pid") o.solver_pid = std::stoi(v);
-    else if (a == "--markers") o.markers = std::stoi(v);
-    else if (a == "--out") o.out = v;
-    else if (a == "--sink") o.sink = v;
-    else if (a == "--duration") o.duration = std::stod(v);
-    else return usage(2);
+    if (a == "--bases")
+      o.bases = lcs_bench::parseIntList(v);
+    else if (a == "--balls")
+      o.balls = lcs_bench::parseIntList(v);
+    else if (a == "--steps")
+      o.steps = std::stoi(v);
+    else if (a == "--count")
+      o.count = std::stoi(v);
+    else if (a == "--warmup")
+      o.warmup = std::stoi(v);
+    else if (a == "--rate-seconds")
+      o.rate_seconds = std::stod(v);
+    else if (a == "--latency-seconds")
+      o.latency_seconds = std::stod(v);
+    else if (a == "--inflight")
+      o.inflight = lcs_bench::parseIntList(v);
+    else if (a == "--pace")
+      o.paces = lcs_bench::parseIntList(v);
+    else if (a == "--pace-seconds")
+      o.pace_seconds = std::stod(v);
+    else if (a == "--label")
+      o.label = v;
+    else if (a == "--solver-pid")
+      o.solver_pid = std::stoi(v);
+    else if (a == "--markers")
+      o.markers = std::stoi(v);
+    else if (a == "--out")
+      o.out = v;
+    else if (a == "--sink")
+      o.sink = v;
+    else if (a == "--duration")
+      o.duration = std::stod(v);
+    else
+      return usage(2);
   }
   return -1;
 }
@@ -175,7 +193,8 @@ int main(int argc, char** argv) {
 
   // The node's parameters, as the node reads them.
   lat::lros::NodeSettings settings;
-  if (const std::string err = lat::lros::loadSettings(ros::NodeHandle("/contact_solver"), &settings); !err.empty()) {
+  if (const std::string err = lat::lros::loadSettings(ros::NodeHandle("/contact_solver"), &settings);
+      !err.empty()) {
     std::fprintf(stderr, "latency: /contact_solver parameters: %s\n", err.c_str());
     return 1;
   }

@@ -28,7 +28,7 @@ struct Options {
   double rate_seconds = 10.0;
   double latency_seconds = 30.0;
   std::vector<int> inflight = {1, 4};
-  std::vector<int> paces;        // Hz: phases publishing on a fixed clock (paced_<Hz>)
+  std::vector<int> paces;  // Hz: phases publishing on a fixed clock (paced_<Hz>)
   double pace_seconds = 10.0;
   std::string label = "node";
   int solver_pid = 0;

@@ -5,9 +5,9 @@
 
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/node/markers.h"
-#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <lcp_contact_solver/ConstraintForces.h>
 #include <ros/serialization.h>
@@ -81,8 +81,10 @@ MessageCosts messageCosts(const lros::NodeSettings& settings, const Case& p, con
   k.bytes_out = wireBytes(out.forces) + wireBytes(out.stats);
   const std::vector<double> mu = lcs::core::effectiveMu(out.problem, params.mu);
   visualization_msgs::MarkerArray markers;
-  k.t_markers = medianTime(
-      [&] { markers = lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display); });
+  k.t_markers = medianTime([&] {
+    markers =
+        lros::buildMarkers(p.contacts.header, out.frames, out.problem, out.result, mu, settings.display);
+  });
   k.marker_bytes = wireBytes(markers);
   return k;
 }
@@ -121,7 +123,8 @@ void referenceCase(const lros::NodeSettings& settings, Case& p, std::ostream& cs
   lcs::core::SolveResult result;
   const double t_solve = medianTime([&] { result = solver.solve(converted); });
   lcs::ConstraintForces forces;
-  const double t_forces = medianTime([&] { forces = lros::toConstraintForcesMsg(p.contacts, frames, converted, result); });
+  const double t_forces =
+      medianTime([&] { forces = lros::toConstraintForcesMsg(p.contacts, frames, converted, result); });
   lros::CycleOutput out;
   const double t_cycle = cycleTime(params, p, &out);
   const MessageCosts k = messageCosts(settings, p, out);
@@ -132,8 +135,8 @@ void referenceCase(const lros::NodeSettings& settings, Case& p, std::ostream& cs
       << k.marker_bytes << ',' << lcs_bench::loadAverage1() << '\n';
   std::printf("| %s | %zu | %s | %.3f | %.3f (%d it) | %.3f | %.3f | %.3f / %.3f | %u / %u | %.3f, %u |\n",
               p.name.c_str(), p.problem.contacts.size(), params.initial_guess ? "on" : "off", 1e3 * t_convert,
-              1e3 * t_solve, result.iterations, 1e3 * t_forces, 1e3 * t_cycle, 1e3 * k.t_ser_in, 1e3 * k.t_ser_out,
-              k.bytes_in, k.bytes_out, 1e3 * k.t_markers, k.marker_bytes);
+              1e3 * t_solve, result.iterations, 1e3 * t_forces, 1e3 * t_cycle, 1e3 * k.t_ser_in,
+              1e3 * k.t_ser_out, k.bytes_in, k.bytes_out, 1e3 * k.t_markers, k.marker_bytes);
   std::fflush(stdout);
 }
 
@@ -144,11 +147,14 @@ void referenceCase(const lros::NodeSettings& settings, Case& p, std::ostream& cs
 // whole CycleSolver::solve, serialization both ways, markers. Median wall times of repeats.
 int runReference(const Options& o, const lros::NodeSettings& settings, std::vector<Case>& problems) {
   std::ofstream csv = openAppending(
-      o.out, "problem,contacts,rows,warm_start,to_problem_ms,solve_ms,solve_iterations,forces_msg_ms,cycle_ms,"
-             "serialize_in_ms,serialize_out_ms,msg_in_bytes,msg_out_bytes,markers_build_ms,marker_bytes,load1\n");
-  std::printf("| problem | contacts | warm start | toProblem (ms) | solve (ms) | toConstraintForcesMsg (ms) | whole cycle "
-              "(ms) | serialize + deserialize in / out (ms) | bytes in / out | markers build (ms, bytes) |\n"
-              "|---|---:|---|---:|---:|---:|---:|---|---|---|\n");
+      o.out,
+      "problem,contacts,rows,warm_start,to_problem_ms,solve_ms,solve_iterations,forces_msg_ms,cycle_ms,"
+      "serialize_in_ms,serialize_out_ms,msg_in_bytes,msg_out_bytes,markers_build_ms,marker_bytes,load1\n");
+  std::printf(
+      "| problem | contacts | warm start | toProblem (ms) | solve (ms) | toConstraintForcesMsg (ms) | whole "
+      "cycle "
+      "(ms) | serialize + deserialize in / out (ms) | bytes in / out | markers build (ms, bytes) |\n"
+      "|---|---:|---|---:|---:|---:|---:|---|---|---|\n");
   for (auto& p : problems) referenceCase(settings, p, csv);
   return 0;
 }

@@ -56,7 +56,9 @@ struct Tracker {
 class Sender {
  public:
   Sender(ros::NodeHandle& nh, Tracker& tracker, bool shared_ptrs);
-  bool connected() const { return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0; }
+  bool connected() const {
+    return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0;
+  }
 
   // Publishes one pair with a fresh stamp; the caller holds no lock.
   void send(Case& p);
@@ -109,6 +111,7 @@ struct PhaseCounts {
 std::ofstream openLiveCsv(const std::string& path);
 void printLiveHeader(const Options& o, const lcs::core::SolverParams& params, bool warm);
 // A CSV row and a table row (with notes) for one phase; the caller holds tracker.m.
-void reportPhase(const PhaseContext& ctx, const std::string& name, int inflight, double pace_hz, const PhaseCounts& c);
+void reportPhase(const PhaseContext& ctx, const std::string& name, int inflight, double pace_hz,
+                 const PhaseCounts& c);
 
 }  // namespace lcs_bench::latency

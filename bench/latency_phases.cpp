@@ -21,10 +21,12 @@ void runPhase(const PhaseContext& ctx, const std::string& name, int inflight, in
   std::unique_lock<std::mutex> lock(tracker.m);
   for (;;) {
     const double elapsed = secondsSince(t0);
-    if (count > 0 ? (sent >= count || (elapsed >= o.latency_seconds && sent >= 10)) : elapsed >= seconds) break;
+    if (count > 0 ? (sent >= count || (elapsed >= o.latency_seconds && sent >= 10)) : elapsed >= seconds)
+      break;
     if (!ros::ok()) break;
     if (pace_hz > 0.0) {
-      const auto next = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(ticks / pace_hz));
+      const auto next =
+          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(ticks / pace_hz));
       if (Clock::now() < next) {
         lock.unlock();
         std::this_thread::sleep_until(next);

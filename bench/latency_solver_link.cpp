@@ -88,7 +88,8 @@ long Tracker::expire(double timeout) {
   return lost;
 }
 
-Sender::Sender(ros::NodeHandle& nh, Tracker& tracker, bool shared_ptrs) : tracker_(tracker), shared_(shared_ptrs) {
+Sender::Sender(ros::NodeHandle& nh, Tracker& tracker, bool shared_ptrs)
+    : tracker_(tracker), shared_(shared_ptrs) {
   contacts_pub_ = nh.advertise<lcs::ContactArray>("contacts", 100);
   compliance_pub_ = nh.advertise<lcs::Compliance>("compliance", 100);
 }
@@ -147,9 +148,11 @@ std::unique_ptr<nodelet::Loader> loadNodelet() {
   return loader;
 }
 
-bool waitForSolver(const Sender& sender, const ros::Subscriber& forces_sub, const ros::Subscriber& stats_sub) {
+bool waitForSolver(const Sender& sender, const ros::Subscriber& forces_sub,
+                   const ros::Subscriber& stats_sub) {
   const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(30.0);
-  while (ros::ok() && (!sender.connected() || forces_sub.getNumPublishers() == 0 || stats_sub.getNumPublishers() == 0)) {
+  while (ros::ok() &&
+         (!sender.connected() || forces_sub.getNumPublishers() == 0 || stats_sub.getNumPublishers() == 0)) {
     if (ros::WallTime::now() > give_up) {
       std::fprintf(stderr, "latency: no contact solver connected within 30 s\n");
       return false;

@@ -61,8 +61,8 @@ struct Options {
   std::vector<std::string> mujoco = {"pgs", "cg", "newton"};
   MujocoExtractOptions::Storage storage = MujocoExtractOptions::Storage::kAuto;
   std::string csv;
-  int threads = 0;      // SolverParams::threads of ours (0 = the core count)
-  bool islands = true;  // SolverParams::islands of ours
+  int threads = 0;                // SolverParams::threads of ours (0 = the core count)
+  bool islands = true;            // SolverParams::islands of ours
   double mujoco_tolerance = 0.0;  // > 0: MuJoCo's solvers also at their own stopping rule
 };
 
@@ -102,7 +102,8 @@ std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream in(s);
   std::string item;
-  while (std::getline(in, item, ',')) if (!item.empty()) out.push_back(item);
+  while (std::getline(in, item, ','))
+    if (!item.empty()) out.push_back(item);
   return out;
 }
 
@@ -115,8 +116,9 @@ double median(std::vector<double> v) {
 
 // MuJoCo's solver `solver` with `iterations` on a copy of `snapshot`: its solve time and the
 // residual of its forces on `mp`.
-std::pair<double, double> runMujoco(const MujocoWorld& snapshot, MujocoWorld& scratch, const MujocoProblem& mp,
-                                    int solver, int iterations, int repeat, double tolerance = 0.0) {
+std::pair<double, double> runMujoco(const MujocoWorld& snapshot, MujocoWorld& scratch,
+                                    const MujocoProblem& mp, int solver, int iterations, int repeat,
+                                    double tolerance = 0.0) {
   double best = 1e300, residual = 0.0;
   for (int r = 0; r < repeat; ++r) {
     scratch.copyDataFrom(snapshot);
@@ -142,7 +144,10 @@ int fewestIterations(const MujocoWorld& snapshot, MujocoWorld& scratch, const Mu
   int lo = hi / 2;  // fails (or 0)
   while (hi - lo > 1) {
     const int mid = (lo + hi) / 2;
-    if (runMujoco(snapshot, scratch, mp, solver, mid, 1).second <= target) hi = mid; else lo = mid;
+    if (runMujoco(snapshot, scratch, mp, solver, mid, 1).second <= target)
+      hi = mid;
+    else
+      lo = mid;
   }
   return hi;
 }
@@ -210,7 +215,8 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
         base.rows = mp.problem.rowCount();
         // efc_AR, which MuJoCo's PGS builds and ours is given.
         double ar = 1e300;
-        for (int r = 0; r < o.repeat; ++r) ar = std::min(ar, computeConstraintAR(scratch->model(), scratch->data()));
+        for (int r = 0; r < o.repeat; ++r)
+          ar = std::min(ar, computeConstraintAR(scratch->model(), scratch->data()));
         Row r0 = base;
         r0.solver = "mujoco_AR";
         r0.seconds = ar;
@@ -263,8 +269,10 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
         const core::Islands islands = core::findIslands(mp.problem);
         std::size_t largest = 0;
         for (const auto& list : islands.contacts) largest = std::max(largest, list.size());
-        std::fprintf(stderr, "%s step %d: %d contacts, %d rows, %zu stored W entries, %d islands (largest %zu contacts)\n",
-                     name.c_str(), step, base.contacts, base.rows, stored, islands.count(), largest);
+        std::fprintf(
+            stderr,
+            "%s step %d: %d contacts, %d rows, %zu stored W entries, %d islands (largest %zu contacts)\n",
+            name.c_str(), step, base.contacts, base.rows, stored, islands.count(), largest);
       }
     }
     forwardToConstraints(world->model(), world->data(), true);  // the reference trajectory
@@ -289,41 +297,55 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--model") o.models.push_back(value());
-    else if (a == "--first") o.first = std::atoi(value().c_str());
-    else if (a == "--count") o.count = std::atoi(value().c_str());
-    else if (a == "--target") o.target = std::atof(value().c_str());
-    else if (a == "--repeat") o.repeat = std::max(1, std::atoi(value().c_str()));
-    else if (a == "--ours") o.ours = split(value());
-    else if (a == "--lemke-max-rows") o.lemke_max_rows = std::atoi(value().c_str());
+    if (a == "--model")
+      o.models.push_back(value());
+    else if (a == "--first")
+      o.first = std::atoi(value().c_str());
+    else if (a == "--count")
+      o.count = std::atoi(value().c_str());
+    else if (a == "--target")
+      o.target = std::atof(value().c_str());
+    else if (a == "--repeat")
+      o.repeat = std::max(1, std::atoi(value().c_str()));
+    else if (a == "--ours")
+      o.ours = split(value());
+    else if (a == "--lemke-max-rows")
+      o.lemke_max_rows = std::atoi(value().c_str());
     else if (a == "--mujoco") {
       const std::string v = value();
       o.mujoco = v == "none" ? std::vector<std::string>() : split(v);
-    }
-    else if (a == "--storage") {
+    } else if (a == "--storage") {
       const std::string v = value();
-      if (v == "dense") o.storage = MujocoExtractOptions::Storage::kDense;
-      else if (v == "block_sparse") o.storage = MujocoExtractOptions::Storage::kBlockSparse;
-      else if (v == "auto") o.storage = MujocoExtractOptions::Storage::kAuto;
+      if (v == "dense")
+        o.storage = MujocoExtractOptions::Storage::kDense;
+      else if (v == "block_sparse")
+        o.storage = MujocoExtractOptions::Storage::kBlockSparse;
+      else if (v == "auto")
+        o.storage = MujocoExtractOptions::Storage::kAuto;
       else {
         std::cerr << "mujoco_bench: --storage takes auto, dense or block_sparse\n";
         return 2;
       }
-    }
-    else if (a == "--csv") o.csv = value();
-    else if (a == "--threads") o.threads = std::max(0, std::atoi(value().c_str()));
-    else if (a == "--islands") o.islands = value() != "off";
-    else if (a == "--mujoco-tolerance") o.mujoco_tolerance = std::atof(value().c_str());
+    } else if (a == "--csv")
+      o.csv = value();
+    else if (a == "--threads")
+      o.threads = std::max(0, std::atoi(value().c_str()));
+    else if (a == "--islands")
+      o.islands = value() != "off";
+    else if (a == "--mujoco-tolerance")
+      o.mujoco_tolerance = std::atof(value().c_str());
     else {
-      std::cerr << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
-                   "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
-                   "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n"
-                   "                    [--threads N] [--islands on|off] [--mujoco-tolerance T]\n";
+      std::cerr
+          << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
+             "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
+             "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n"
+             "                    [--threads N] [--islands on|off] [--mujoco-tolerance T]\n";
       return a == "--help" || a == "-h" ? 0 : 2;
     }
   }
   if (o.models.empty())
-    o.models = {"/usr/share/mujoco/model/humanoid/22_humanoids.xml", "/usr/share/mujoco/model/humanoid100/humanoid100.xml"};
+    o.models = {"/usr/share/mujoco/model/humanoid/22_humanoids.xml",
+                "/usr/share/mujoco/model/humanoid100/humanoid100.xml"};
 
   std::vector<Row> rows;
   for (const std::string& m : o.models) benchModel(m, o, &rows);
@@ -332,15 +354,16 @@ int main(int argc, char** argv) {
     std::ofstream csv(o.csv);
     csv << "model,step,time,contacts,rows,solver,iterations,residual,reached,seconds\n";
     for (const Row& r : rows)
-      csv << r.model << ',' << r.step << ',' << r.time << ',' << r.contacts << ',' << r.rows << ',' << r.solver << ','
-          << r.iterations << ',' << r.residual << ',' << (r.reached ? 1 : 0) << ',' << r.seconds << '\n';
+      csv << r.model << ',' << r.step << ',' << r.time << ',' << r.contacts << ',' << r.rows << ','
+          << r.solver << ',' << r.iterations << ',' << r.residual << ',' << (r.reached ? 1 : 0) << ','
+          << r.seconds << '\n';
   }
 
   // Summary: per model and solver, medians over the measured steps.
   std::printf("target residual %.0e (package measure), MuJoCo %s, times: min of %d runs, median over steps\n",
               o.target, mj_versionString(), o.repeat);
-  std::printf("%-14s %-20s %6s %7s %6s %12s %10s %12s\n", "model", "solver", "steps", "reached", "rows", "iterations",
-              "ms/step", "max residual");
+  std::printf("%-14s %-20s %6s %7s %6s %12s %10s %12s\n", "model", "solver", "steps", "reached", "rows",
+              "iterations", "ms/step", "max residual");
   std::map<std::pair<std::string, std::string>, std::vector<const Row*>> groups;
   std::vector<std::pair<std::string, std::string>> order;
   for (const Row& r : rows) {
@@ -360,8 +383,8 @@ int main(int argc, char** argv) {
       reached += r->reached;
       worst = std::max(worst, r->residual);
     }
-    std::printf("%-14s %-20s %6zu %7d %6.0f %12.0f %10.3f %12.1e\n", key.first.c_str(), key.second.c_str(), g.size(),
-                reached, median(n), median(it), 1e3 * median(t), worst);
+    std::printf("%-14s %-20s %6zu %7d %6.0f %12.0f %10.3f %12.1e\n", key.first.c_str(), key.second.c_str(),
+                g.size(), reached, median(n), median(it), 1e3 * median(t), worst);
   }
   // Sweep bandwidth of ours on scalar rows: bytes of a full sweep × sweeps / solve time (setup
   // and the stopping test included, so a lower bound of the sweep's own rate; with islands,
@@ -379,8 +402,8 @@ int main(int argc, char** argv) {
       std::printf("stream triad: %.1f GB/s\n", triadBandwidth() / 1e9);
       header = true;
     }
-    std::printf("%-14s %-20s scalar-row sweep: %.0f KB per sweep, %.2f GB/s (median over steps)\n", key.first.c_str(),
-                key.second.c_str(), median(kb), median(rate) / 1e9);
+    std::printf("%-14s %-20s scalar-row sweep: %.0f KB per sweep, %.2f GB/s (median over steps)\n",
+                key.first.c_str(), key.second.c_str(), median(kb), median(rate) / 1e9);
   }
   return 0;
 }

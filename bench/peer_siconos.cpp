@@ -17,12 +17,12 @@
 #include <cstring>
 
 extern "C" {
-#include <SiconosNumerics.h>
-#include <Friction_cst.h>
 #include <FrictionContactProblem.h>
+#include <Friction_cst.h>
 #include <LinearComplementarityProblem.h>
 #include <NumericsMatrix.h>
 #include <NumericsVerbose.h>
+#include <SiconosNumerics.h>
 #include <SolverOptions.h>
 #include <SparseBlockMatrix.h>
 #include <lcp_cst.h>
@@ -114,10 +114,14 @@ PeerOutcome outcome(int info, int fatal, const SolverOptions* options, const std
   out.iterations = options->iparam[SICONOS_IPARAM_ITER_DONE];
   out.self_error = options->dparam[SICONOS_DPARAM_RESIDU];
   out.claims_success = fatal == 0 && info == 0;
-  if (fatal) out.status = "failed";
-  else if (info == 0) out.status = "converged";
-  else if (iterative && out.iterations >= setting.max_iterations) out.status = "max_iterations";
-  else out.status = "failed";
+  if (fatal)
+    out.status = "failed";
+  else if (info == 0)
+    out.status = "converged";
+  else if (iterative && out.iterations >= setting.max_iterations)
+    out.status = "max_iterations";
+  else
+    out.status = "failed";
   return out;
 }
 

@@ -19,16 +19,16 @@ namespace lcs_bench {
 // One point of a sweep: a tolerance for iterative methods, an iteration count for methods
 // without a residual-based stopping rule, or a single "direct" setting.
 struct Setting {
-  std::string label;           // as written in the CSV "setting" column
+  std::string label;  // as written in the CSV "setting" column
   double tolerance = std::numeric_limits<double>::quiet_NaN();
-  int max_iterations = 0;      // the cap handed to the method
+  int max_iterations = 0;  // the cap handed to the method
 };
 
 struct PeerOutcome {
-  Eigen::VectorXd forces;      // one per row of our Problem, in our row order and sign
-  std::string status;          // "converged", "max_iterations", "failed", ...
-  bool claims_success = false; // the method's own verdict
-  int iterations = -1;         // as reported by the method (-1: none)
+  Eigen::VectorXd forces;       // one per row of our Problem, in our row order and sign
+  std::string status;           // "converged", "max_iterations", "failed", ...
+  bool claims_success = false;  // the method's own verdict
+  int iterations = -1;          // as reported by the method (-1: none)
   double self_error = std::numeric_limits<double>::quiet_NaN();  // its own error measure
 };
 

@@ -32,8 +32,8 @@
 // ratio dense sweep / (bytes of W / bandwidth): 1 means a sweep costs exactly one read of W.
 // Times are CPU time of the benchmark's thread (timing_util.h: the machine is shared), the
 // fastest of the repeats.
-#include "timing_util.h"
 #include "scene_problems.h"
+#include "timing_util.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
@@ -71,10 +71,11 @@ struct Options {
 };
 
 int usage(int code) {
-  std::fprintf(code ? stderr : stdout,
-               "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
-               "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB]\n"
-               "                     [--copies K] [--threads N] [--out FILE.csv]\n");
+  std::fprintf(
+      code ? stderr : stdout,
+      "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
+      "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB]\n"
+      "                     [--copies K] [--threads N] [--out FILE.csv]\n");
   return code;
 }
 
@@ -107,18 +108,24 @@ std::string num(double v, const char* fmt = "%.6g") {
 
 std::string human(double bytes) {
   char b[32];
-  if (bytes >= 1e9) std::snprintf(b, sizeof(b), "%.2f GB", bytes / 1e9);
-  else if (bytes >= 1e6) std::snprintf(b, sizeof(b), "%.1f MB", bytes / 1e6);
-  else std::snprintf(b, sizeof(b), "%.0f kB", bytes / 1e3);
+  if (bytes >= 1e9)
+    std::snprintf(b, sizeof(b), "%.2f GB", bytes / 1e9);
+  else if (bytes >= 1e6)
+    std::snprintf(b, sizeof(b), "%.1f MB", bytes / 1e6);
+  else
+    std::snprintf(b, sizeof(b), "%.0f kB", bytes / 1e3);
   return b;
 }
 
 std::string ms(double s) {
   if (!std::isfinite(s)) return "✗";
   char b[32];
-  if (s < 1e-3) std::snprintf(b, sizeof(b), "%.0f µs", 1e6 * s);
-  else if (s < 1.0) std::snprintf(b, sizeof(b), "%.3g ms", 1e3 * s);
-  else std::snprintf(b, sizeof(b), "%.2f s", s);
+  if (s < 1e-3)
+    std::snprintf(b, sizeof(b), "%.0f µs", 1e6 * s);
+  else if (s < 1.0)
+    std::snprintf(b, sizeof(b), "%.3g ms", 1e3 * s);
+  else
+    std::snprintf(b, sizeof(b), "%.2f s", s);
   return b;
 }
 
@@ -189,18 +196,30 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") return usage(0);
     if (i + 1 >= argc) return usage(2);
     const std::string v = argv[++i];
-    if (a == "--bases") o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls") o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--pyramid-steps") o.pyramid_steps = std::stoi(v);
-    else if (a == "--pile-steps") o.pile_steps = std::stoi(v);
-    else if (a == "--dense-max-gb") o.dense_max_gb = std::stod(v);
-    else if (a == "--budget") o.budget = std::stod(v);
-    else if (a == "--rounds") o.rounds = std::stoi(v);
-    else if (a == "--array-mb") o.array_mb = std::stoi(v);
-    else if (a == "--copies") o.copies = std::stoi(v);
-    else if (a == "--threads") o.threads = std::stoi(v);
-    else if (a == "--out") o.out = v;
-    else return usage(2);
+    if (a == "--bases")
+      o.bases = lcs_bench::parseIntList(v);
+    else if (a == "--balls")
+      o.balls = lcs_bench::parseIntList(v);
+    else if (a == "--pyramid-steps")
+      o.pyramid_steps = std::stoi(v);
+    else if (a == "--pile-steps")
+      o.pile_steps = std::stoi(v);
+    else if (a == "--dense-max-gb")
+      o.dense_max_gb = std::stod(v);
+    else if (a == "--budget")
+      o.budget = std::stod(v);
+    else if (a == "--rounds")
+      o.rounds = std::stoi(v);
+    else if (a == "--array-mb")
+      o.array_mb = std::stoi(v);
+    else if (a == "--copies")
+      o.copies = std::stoi(v);
+    else if (a == "--threads")
+      o.threads = std::stoi(v);
+    else if (a == "--out")
+      o.out = v;
+    else
+      return usage(2);
   }
   std::ofstream csv(o.out);
   if (!csv) {
@@ -210,26 +229,29 @@ int main(int argc, char** argv) {
   std::printf("scaling: load average %s at the start, %ld cores\n", lcs_bench::loadAverageText().c_str(),
               sysconf(_SC_NPROCESSORS_ONLN));
   const double bw0 = readBandwidth(o.array_mb);
-  std::printf("scaling: read bandwidth %.2f GB/s (sum of %d MB, one thread, fastest of 5)\n", bw0 / 1e9, o.array_mb);
+  std::printf("scaling: read bandwidth %.2f GB/s (sum of %d MB, one thread, fastest of 5)\n", bw0 / 1e9,
+              o.array_mb);
   std::fflush(stdout);
 
   csv << "problem,family,bodies,contacts,rows,form,w_bytes,setup_ms,sweeps,us_per_sweep,us_marginal_sweep,"
-         "ns_per_row_sweep,bandwidth_gbs,read_w_us,sweep_over_read_w,marginal_over_read_w,t_1e-4_ms,it_1e-4,solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
-         "solver_1e-6,status_1e-6,residual_1e-6,penetrating_contacts,setup_without_erp_ms,load1,islands,island_count,"
+         "ns_per_row_sweep,bandwidth_gbs,read_w_us,sweep_over_read_w,marginal_over_read_w,t_1e-4_ms,it_1e-4,"
+         "solver_1e-4,status_1e-4,t_1e-6_ms,it_1e-6,"
+         "solver_1e-6,status_1e-6,residual_1e-6,penetrating_contacts,setup_without_erp_ms,load1,islands,"
+         "island_count,"
          "w_bytes_per_contact\n";
 
   std::vector<lcs_bench::SceneProblem> problems;
   const auto t_gen = Clock::now();
   for (int b : o.bases) {
     auto p = lcs_bench::makeSceneProblems(LCS_SCENES_DIR, {b}, {}, o.pyramid_steps);
-    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(), p[0].problem.contacts.size(),
-                 secondsSince(t_gen));
+    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(),
+                 p[0].problem.contacts.size(), secondsSince(t_gen));
     problems.push_back(std::move(p[0]));
   }
   for (int n : o.balls) {
     auto p = lcs_bench::makeSceneProblems(LCS_SCENES_DIR, {}, {n}, o.pile_steps);
-    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(), p[0].problem.contacts.size(),
-                 secondsSince(t_gen));
+    std::fprintf(stderr, "generated %s (%zu contacts) at %.0f s\n", p[0].name.c_str(),
+                 p[0].problem.contacts.size(), secondsSince(t_gen));
     problems.push_back(std::move(p[0]));
   }
   // Islands: each problem K times side by side (block-sparse only: the body form and the dense
@@ -245,9 +267,10 @@ int main(int argc, char** argv) {
     problems.push_back(std::move(copy));
   }
 
-  std::printf("\n| problem | contacts | rows | form | W bytes | W bytes / contact | setup (erp = 0) | µs/sweep | "
-              "marginal µs/sweep | ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
-              "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "\n| problem | contacts | rows | form | W bytes | W bytes / contact | setup (erp = 0) | µs/sweep | "
+      "marginal µs/sweep | ns/row·sweep | sweep ÷ read(W) | to 1e-4 (auto) | to 1e-6 (auto) |\n"
+      "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (std::size_t pi = 0; pi < problems.size(); ++pi) {
     lcs_bench::SceneProblem& sp = problems[pi];
     const lcs::core::Problem& sparse = sp.problem;
@@ -270,10 +293,11 @@ int main(int argc, char** argv) {
       dense.W = std::get<lcs::core::BlockSparseMatrix>(sparse.W).toDense();
       forms.push_back({"dense", &dense, true});
     } else if (!copies) {
-      csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense," << num(dense_bytes)
-          << ",,,,,,,,,,,,,skipped,,,,skipped,,,," << num(lcs_bench::loadAverage1(), "%.2f") << ",,,\n";
-      std::printf("| %s | %d | %d | dense | %s | %.0f | skipped (W > %.1f GB) | | | | | | |\n", sp.name.c_str(), nc,
-                  rows, human(dense_bytes).c_str(), dense_bytes / nc, o.dense_max_gb);
+      csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ",dense,"
+          << num(dense_bytes) << ",,,,,,,,,,,,,skipped,,,,skipped,,,,"
+          << num(lcs_bench::loadAverage1(), "%.2f") << ",,,\n";
+      std::printf("| %s | %d | %d | dense | %s | %.0f | skipped (W > %.1f GB) | | | | | | |\n",
+                  sp.name.c_str(), nc, rows, human(dense_bytes).c_str(), dense_bytes / nc, o.dense_max_gb);
     }
     const lcs::core::Problem normals = normalRowsOnly(sparse);
     forms.push_back({"block_sparse", &sparse, true});
@@ -308,7 +332,8 @@ int main(int argc, char** argv) {
       lcs_bench::sweepRound(*forms[i].problem, params, sweeps, &sweep_acc[i], 0.02, 1);
       if (penetrating > 0) lcs_bench::sweepRound(plain[i], params, sweeps, &plain_acc[i], 0.02, 1);
       for (int k = 0; k < 2; ++k) {
-        lcs::core::SolverParams p = lcs_bench::toleranceParams(lcs::core::SolverKind::kAuto, tols[k], o.budget, 1000000);
+        lcs::core::SolverParams p =
+            lcs_bench::toleranceParams(lcs::core::SolverKind::kAuto, tols[k], o.budget, 1000000);
         p.build_lcp = forms[i].build_lcp;
         p.islands = forms[i].islands;
         p.threads = o.threads;
@@ -329,12 +354,13 @@ int main(int argc, char** argv) {
       const auto& tol = tol_acc[i];
       auto t_of = [](const lcs_bench::SolveAcc& t) { return t.result.converged ? t.best : std::nan(""); };
       csv << sp.name << ',' << family << ',' << sp.bodies << ',' << nc << ',' << rows << ',' << f.name << ','
-          << num(bytes) << ',' << num(1e3 * st.setup) << ',' << st.sweeps << ',' << num(1e6 * st.per_sweep) << ','
-          << num(1e6 * st.marginal) << ',' << num(1e9 * st.per_sweep / rows) << ',' << num(bw0 / 1e9) << ','
-          << num(1e6 * read_w) << ',' << num(st.per_sweep / read_w) << ',' << num(st.marginal / read_w) << ',';
+          << num(bytes) << ',' << num(1e3 * st.setup) << ',' << st.sweeps << ',' << num(1e6 * st.per_sweep)
+          << ',' << num(1e6 * st.marginal) << ',' << num(1e9 * st.per_sweep / rows) << ',' << num(bw0 / 1e9)
+          << ',' << num(1e6 * read_w) << ',' << num(st.per_sweep / read_w) << ',' << num(st.marginal / read_w)
+          << ',';
       for (int k = 0; k < 2; ++k)
-        csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver << ','
-            << lcs::core::statusName(tol[k].result.status) << ',';
+        csv << num(1e3 * t_of(tol[k])) << ',' << tol[k].result.iterations << ',' << tol[k].result.solver
+            << ',' << lcs::core::statusName(tol[k].result.status) << ',';
       csv << num(tol[1].result.residual) << ',' << penetrating << ',' << num(1e3 * plain_setup) << ','
           << num(lcs_bench::loadAverage1(), "%.2f") << ',' << (f.islands ? "on" : "off") << ','
           << lcs::core::findIslands(*f.problem).count() << ',' << num(bytes / nc) << '\n';
@@ -344,12 +370,12 @@ int main(int argc, char** argv) {
                                      (std::isfinite(plain_setup) ? ms(plain_setup) : std::string("–")) + ")";
       const std::string form_text = f.name + (copies ? (f.islands ? ", islands on" : ", islands off") : "");
       std::printf("| %s | %d | %d | %s | %s | %.0f | %s | %s | %s | %s | %s | %s (%s, %d) | %s (%s, %d) |\n",
-                  sp.name.c_str(), nc, rows, form_text.c_str(), human(bytes).c_str(), bytes / nc, setup_text.c_str(),
-                  cell(1e6 * st.per_sweep, "%.1f").c_str(),
+                  sp.name.c_str(), nc, rows, form_text.c_str(), human(bytes).c_str(), bytes / nc,
+                  setup_text.c_str(), cell(1e6 * st.per_sweep, "%.1f").c_str(),
                   cell(1e6 * st.marginal, "%.1f").c_str(), cell(1e9 * st.per_sweep / rows, "%.1f").c_str(),
-                  cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(), tol[0].result.solver.c_str(),
-                  tol[0].result.iterations, ms(t_of(tol[1])).c_str(), tol[1].result.solver.c_str(),
-                  tol[1].result.iterations);
+                  cell(st.per_sweep / read_w, "%.2f").c_str(), ms(t_of(tol[0])).c_str(),
+                  tol[0].result.solver.c_str(), tol[0].result.iterations, ms(t_of(tol[1])).c_str(),
+                  tol[1].result.solver.c_str(), tol[1].result.iterations);
       std::fflush(stdout);
     }
   }

@@ -13,8 +13,8 @@
 #include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
-#include <CLI/CLI.hpp>
 #include <rosbag/bag.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -29,8 +29,11 @@ int main(int argc, char** argv) {
   std::string family = "sphere_pile", out;
   int size = 100, first = 150, count = 300;
   app.add_option("--family", family, "box_pyramid or sphere_pile")->capture_default_str();
-  app.add_option("--size", size, "bricks at the base, or balls")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--first", first, "steps simulated before the first one written")->capture_default_str()
+  app.add_option("--size", size, "bricks at the base, or balls")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--first", first, "steps simulated before the first one written")
+      ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   app.add_option("--count", count, "steps written")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--out", out, "the bag to write")->required();
@@ -57,8 +60,9 @@ int main(int argc, char** argv) {
       ++written;
     }
     bag.close();
-    std::printf("scene_bag: %s_%d steps %d..%d: %d problems written to %s, %d to %d contacts\n", family.c_str(),
-                size, first, first + count - 1, written, out.c_str(), min_contacts, max_contacts);
+    std::printf("scene_bag: %s_%d steps %d..%d: %d problems written to %s, %d to %d contacts\n",
+                family.c_str(), size, first, first + count - 1, written, out.c_str(), min_contacts,
+                max_contacts);
     return written > 0 ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scene_bag: %s\n", e.what());

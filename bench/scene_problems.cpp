@@ -26,12 +26,12 @@ void floatingBody(std::ostringstream& u, const std::string& name, double mass, d
     << name << "\"/><origin xyz=\"" << x << " " << y << " " << z << "\"/></joint>\n";
 }
 
-void staticBox(std::ostringstream& u, const std::string& name, double sx, double sy, double sz,
-               double x, double y, double z) {
-  u << "  <link name=\"" << name << "\"><collision><geometry><box size=\"" << sx << " " << sy << " "
-    << sz << "\"/></geometry></collision></link>\n"
-    << "  <joint name=\"" << name << "_joint\" type=\"fixed\"><parent link=\"world\"/><child link=\""
-    << name << "\"/><origin xyz=\"" << x << " " << y << " " << z << "\"/></joint>\n";
+void staticBox(std::ostringstream& u, const std::string& name, double sx, double sy, double sz, double x,
+               double y, double z) {
+  u << "  <link name=\"" << name << "\"><collision><geometry><box size=\"" << sx << " " << sy << " " << sz
+    << "\"/></geometry></collision></link>\n"
+    << "  <joint name=\"" << name << "_joint\" type=\"fixed\"><parent link=\"world\"/><child link=\"" << name
+    << "\"/><origin xyz=\"" << x << " " << y << " " << z << "\"/></joint>\n";
 }
 
 // Brick pyramid in the x-z plane: layer l (from 0 at the ground) has base - l cubes of side
@@ -48,7 +48,8 @@ std::string pyramidUrdf(int base) {
     for (int i = 0; i < count; ++i) {
       const double x = (i - 0.5 * (count - 1)) * pitch;
       const double z = 0.5 * s + layer * s;
-      floatingBody(u, "box_" + std::to_string(++k), 1.0, 0.00666666667, "<box size=\"0.2 0.2 0.2\"/>", x, 0.0, z);
+      floatingBody(u, "box_" + std::to_string(++k), 1.0, 0.00666666667, "<box size=\"0.2 0.2 0.2\"/>", x, 0.0,
+                   z);
     }
   }
   u << "</robot>\n";
@@ -127,13 +128,14 @@ sc::Scene makeBenchScene(const std::string& scenes_dir, const std::string& famil
                                        "box_pyramid");
   if (family == "sphere_pile") {
     int side = 0;
-    return sc::loadSceneFromUrdfString(pileUrdf(size, &side), generationParams(scenes_dir + "/sphere_pile.yaml"),
-                                       "sphere_pile");
+    return sc::loadSceneFromUrdfString(pileUrdf(size, &side),
+                                       generationParams(scenes_dir + "/sphere_pile.yaml"), "sphere_pile");
   }
   throw std::invalid_argument("unknown scene family '" + family + "' (box_pyramid or sphere_pile)");
 }
 
-std::vector<SceneProblem> makeSceneProblems(const std::string& scenes_dir, const std::vector<int>& pyramid_bases,
+std::vector<SceneProblem> makeSceneProblems(const std::string& scenes_dir,
+                                            const std::vector<int>& pyramid_bases,
                                             const std::vector<int>& pile_balls, int steps) {
   std::vector<SceneProblem> out;
   for (int base : pyramid_bases)

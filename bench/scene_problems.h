@@ -27,7 +27,7 @@ struct SceneProblem {
   std::string name;   // e.g. "box_pyramid_B5"
   std::string scene;  // the shipped scene whose parameters it uses
   int bodies = 0;
-  int steps = 0;      // simulated steps before the problem was taken
+  int steps = 0;  // simulated steps before the problem was taken
   lcp_contact_solver::core::Problem problem;
   // The same step with the compliance in body form (Problem::bodies, no W; the unbuilt solve,
   // bench/unbuilt_scaling.cpp).
@@ -43,6 +43,7 @@ std::vector<SceneProblem> makeSceneProblems(const std::string& scenes_dir,
 // The scene behind one of those problems before its first step: family "box_pyramid" (size =
 // bricks at the base) or "sphere_pile" (size = balls), parameters from the shipped scene,
 // in-process solver nlgs at 1e-6. Throws std::invalid_argument for another family.
-lcp_contact_solver::scene::Scene makeBenchScene(const std::string& scenes_dir, const std::string& family, int size);
+lcp_contact_solver::scene::Scene makeBenchScene(const std::string& scenes_dir, const std::string& family,
+                                                int size);
 
 }  // namespace lcs_bench

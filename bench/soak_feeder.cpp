@@ -24,11 +24,11 @@
 
 #include <algorithm>
 #include <atomic>
-#include <mutex>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -49,9 +49,11 @@ struct Pair {
 // differs): say so, or an outdated bag would look empty.
 template <class M>
 void checkDefinition(const rosbag::MessageInstance& m) {
-  if (m.getDataType() == ros::message_traits::datatype<M>() && m.getMD5Sum() != ros::message_traits::md5sum<M>())
+  if (m.getDataType() == ros::message_traits::datatype<M>() &&
+      m.getMD5Sum() != ros::message_traits::md5sum<M>())
     throw std::runtime_error(m.getDataType() + " was recorded with another definition of the message (MD5 " +
-                             m.getMD5Sum() + ", built " + ros::message_traits::md5sum<M>() + "): re-record the bag");
+                             m.getMD5Sum() + ", built " + ros::message_traits::md5sum<M>() +
+                             "): re-record the bag");
 }
 
 // Matched by stamp, whatever the topics were called when recorded; the other types in the
@@ -63,8 +65,10 @@ std::vector<Pair> readPairs(const std::string& path) {
   for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
     checkDefinition<ContactArray>(m);
     checkDefinition<Compliance>(m);
-    if (auto c = m.instantiate<ContactArray>()) contacts[c->header.stamp] = c;
-    else if (auto w = m.instantiate<Compliance>()) compliance[w->header.stamp] = w;
+    if (auto c = m.instantiate<ContactArray>())
+      contacts[c->header.stamp] = c;
+    else if (auto w = m.instantiate<Compliance>())
+      compliance[w->header.stamp] = w;
   }
   std::vector<Pair> pairs;
   for (const auto& [stamp, c] : contacts) {
@@ -95,11 +99,16 @@ int main(int argc, char** argv) {
   double rate = 1000.0, duration = 300.0;
   for (int i = 1; i < argc; ++i) {  // ros::init has removed the remappings
     const std::string a = argv[i];
-    if (a == "--rate" && i + 1 < argc) rate = std::atof(argv[++i]);
-    else if (a == "--duration" && i + 1 < argc) duration = std::atof(argv[++i]);
-    else if (a == "--stats" && i + 1 < argc) stats_topic = argv[++i];
-    else if (!a.empty() && a[0] != '-') bag = a;
-    else return usage();
+    if (a == "--rate" && i + 1 < argc)
+      rate = std::atof(argv[++i]);
+    else if (a == "--duration" && i + 1 < argc)
+      duration = std::atof(argv[++i]);
+    else if (a == "--stats" && i + 1 < argc)
+      stats_topic = argv[++i];
+    else if (!a.empty() && a[0] != '-')
+      bag = a;
+    else
+      return usage();
   }
   if (bag.empty() || !(rate > 0.0) || !(duration > 0.0)) return usage();
 
@@ -166,8 +175,8 @@ int main(int argc, char** argv) {
   }
   ros::WallDuration(0.5).sleep();  // connections are counted before the header exchange ends
 
-  std::printf("soak_feeder: %zu pairs from %s (%zu contacts in the first), %.0f Hz for %.0f s\n", pairs.size(),
-              bag.c_str(), pairs.front().contacts.contacts.size(), rate, duration);
+  std::printf("soak_feeder: %zu pairs from %s (%zu contacts in the first), %.0f Hz for %.0f s\n",
+              pairs.size(), bag.c_str(), pairs.front().contacts.contacts.size(), rate, duration);
   std::fflush(stdout);
 
   // Wall time throughout: the soak runs without /clock, and its rate is a real-time one.
@@ -192,9 +201,11 @@ int main(int argc, char** argv) {
         std::lock_guard<std::mutex> lock(latency_mutex);
         second.swap(second_latencies);
       }
-      std::printf("t %5.0f s  sent %9ld  rate %7.1f Hz  forces %9ld  stats %9ld  failures %6ld  latency p50 %.3f p99 %.3f ms\n",
-                  elapsed, sent, (sent - sent_at_report) / (elapsed - last_report), forces.load(), stats.load(),
-                  failures.load(), 1e3 * percentile(&second, 0.5), 1e3 * percentile(&second, 0.99));
+      std::printf(
+          "t %5.0f s  sent %9ld  rate %7.1f Hz  forces %9ld  stats %9ld  failures %6ld  latency p50 %.3f p99 "
+          "%.3f ms\n",
+          elapsed, sent, (sent - sent_at_report) / (elapsed - last_report), forces.load(), stats.load(),
+          failures.load(), 1e3 * percentile(&second, 0.5), 1e3 * percentile(&second, 0.99));
       std::fflush(stdout);
       sent_at_report = sent;
       last_report = elapsed;
@@ -205,17 +216,21 @@ int main(int argc, char** argv) {
 
   // The last answers are still on their way.
   const ros::WallTime drain_end = ros::WallTime::now() + ros::WallDuration(2.0);
-  while (ros::ok() && ros::WallTime::now() < drain_end && stats.load() < sent) ros::WallDuration(0.01).sleep();
+  while (ros::ok() && ros::WallTime::now() < drain_end && stats.load() < sent)
+    ros::WallDuration(0.01).sleep();
   spinner.stop();
 
-  std::printf("summary: sent %ld pairs in %.1f s (%.1f Hz achieved, %.0f Hz asked); forces received %ld, "
-              "stats received %ld, failures %ld, unanswered %ld\n",
-              sent, total, sent / total, rate, forces.load(), stats.load(), failures.load(), sent - stats.load());
+  std::printf(
+      "summary: sent %ld pairs in %.1f s (%.1f Hz achieved, %.0f Hz asked); forces received %ld, "
+      "stats received %ld, failures %ld, unanswered %ld\n",
+      sent, total, sent / total, rate, forces.load(), stats.load(), failures.load(), sent - stats.load());
   for (const auto& [status, n] : failed_by_status) std::printf("failures: %ld %s\n", n, status.c_str());
   std::lock_guard<std::mutex> lock(latency_mutex);
-  std::printf("latency (publish to forces received, ms, %zu forces): p50 %.3f  p90 %.3f  p99 %.3f  p99.9 %.3f  max %.3f\n",
-              latencies.size(), 1e3 * percentile(&latencies, 0.5), 1e3 * percentile(&latencies, 0.9),
-              1e3 * percentile(&latencies, 0.99), 1e3 * percentile(&latencies, 0.999),
-              1e3 * percentile(&latencies, 1.0));
+  std::printf(
+      "latency (publish to forces received, ms, %zu forces): p50 %.3f  p90 %.3f  p99 %.3f  p99.9 %.3f  max "
+      "%.3f\n",
+      latencies.size(), 1e3 * percentile(&latencies, 0.5), 1e3 * percentile(&latencies, 0.9),
+      1e3 * percentile(&latencies, 0.99), 1e3 * percentile(&latencies, 0.999),
+      1e3 * percentile(&latencies, 1.0));
   return stats.load() > 0 ? 0 : 1;
 }

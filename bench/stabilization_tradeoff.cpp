@@ -33,11 +33,16 @@ Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--scene") o.scene = value;
-    else if (key == "--scenes-dir") o.scenes_dir = value;
-    else if (key == "--steps") o.steps = std::atoi(value.c_str());
-    else if (key == "--tolerance") o.tolerance = std::atof(value.c_str());
-    else if (key == "--out") o.out = value;
+    if (key == "--scene")
+      o.scene = value;
+    else if (key == "--scenes-dir")
+      o.scenes_dir = value;
+    else if (key == "--steps")
+      o.steps = std::atoi(value.c_str());
+    else if (key == "--tolerance")
+      o.tolerance = std::atof(value.c_str());
+    else if (key == "--out")
+      o.out = value;
     else {
       std::cerr << "unknown option " << key << "\n";
       std::exit(2);
@@ -49,8 +54,8 @@ Options parse(int argc, char** argv) {
 struct Row {
   double erp, softness;
   double mean_sweeps = 0, max_sweeps = 0, mean_solve_ms = 0;
-  double max_depth = 0;     // deepest contact at the end (m)
-  double max_speed = 0;     // fastest body at the end (m/s)
+  double max_depth = 0;  // deepest contact at the end (m)
+  double max_speed = 0;  // fastest body at the end (m/s)
   int unconverged = 0;
 };
 
@@ -79,7 +84,8 @@ Row run(const Options& o, double erp, double softness) {
     row.mean_sweeps /= counted;
     row.mean_solve_ms /= counted;
   }
-  for (const scene::SceneContact& f : sim.lastProblem().frames) row.max_depth = std::max(row.max_depth, f.depth);
+  for (const scene::SceneContact& f : sim.lastProblem().frames)
+    row.max_depth = std::max(row.max_depth, f.depth);
   for (const scene::RigidBody& b : sim.scene().bodies)
     if (!b.is_static) row.max_speed = std::max(row.max_speed, b.linear_velocity.norm());
   return row;
@@ -94,16 +100,18 @@ int main(int argc, char** argv) {
     std::cerr << "cannot write " << o.out << "\n";
     return 1;
   }
-  csv << "scene,erp,softness,mean_sweeps,max_sweeps,mean_solve_ms,unconverged_steps,max_depth_m,max_speed_mps\n";
-  std::printf("%-10s %5s %9s %12s %10s %14s %12s %12s\n", "scene", "erp", "softness", "mean sweeps", "max sweeps",
-              "mean solve ms", "depth (mm)", "speed (m/s)");
+  csv << "scene,erp,softness,mean_sweeps,max_sweeps,mean_solve_ms,unconverged_steps,max_depth_m,max_speed_"
+         "mps\n";
+  std::printf("%-10s %5s %9s %12s %10s %14s %12s %12s\n", "scene", "erp", "softness", "mean sweeps",
+              "max sweeps", "mean solve ms", "depth (mm)", "speed (m/s)");
   for (double erp : {0.1, 0.2, 0.5}) {
     for (double softness : {0.0, 1e-7, 1e-6, 1e-5, 1e-4}) {
       const Row r = run(o, erp, softness);
-      csv << o.scene << "," << r.erp << "," << r.softness << "," << r.mean_sweeps << "," << r.max_sweeps << ","
-          << r.mean_solve_ms << "," << r.unconverged << "," << r.max_depth << "," << r.max_speed << "\n";
-      std::printf("%-10s %5.2f %9.0e %12.1f %10.0f %14.3f %12.4f %12.2e\n", o.scene.c_str(), r.erp, r.softness,
-                  r.mean_sweeps, r.max_sweeps, r.mean_solve_ms, 1e3 * r.max_depth, r.max_speed);
+      csv << o.scene << "," << r.erp << "," << r.softness << "," << r.mean_sweeps << "," << r.max_sweeps
+          << "," << r.mean_solve_ms << "," << r.unconverged << "," << r.max_depth << "," << r.max_speed
+          << "\n";
+      std::printf("%-10s %5.2f %9.0e %12.1f %10.0f %14.3f %12.4f %12.2e\n", o.scene.c_str(), r.erp,
+                  r.softness, r.mean_sweeps, r.max_sweeps, r.mean_solve_ms, 1e3 * r.max_depth, r.max_speed);
     }
   }
   return 0;

@@ -60,15 +60,18 @@ inline std::vector<int> parseIntList(const std::string& s) {
 // Bytes of the stored compliance (values + index arrays; not the vectors' spare capacity).
 inline std::size_t bytesOf(const lcs::core::BlockSparseMatrix& W) {
   return W.values.size() * sizeof(double) +
-         (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) * sizeof(int);
+         (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) *
+             sizeof(int);
 }
 inline std::size_t bytesOf(const lcs::core::BodyCompliance& B) {
-  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) + B.contacts.size() * sizeof(lcs::core::ContactJacobian) +
+  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) +
+         B.contacts.size() * sizeof(lcs::core::ContactJacobian) +
          static_cast<std::size_t>(B.diagonal.size()) * sizeof(double);
 }
 inline std::size_t bytesOfCompliance(const lcs::core::Problem& p) {
   if (p.bodies) return bytesOf(*p.bodies);
-  if (const auto* d = std::get_if<Eigen::MatrixXd>(&p.W)) return static_cast<std::size_t>(d->size()) * sizeof(double);
+  if (const auto* d = std::get_if<Eigen::MatrixXd>(&p.W))
+    return static_cast<std::size_t>(d->size()) * sizeof(double);
   return bytesOf(std::get<lcs::core::BlockSparseMatrix>(p.W));
 }
 
@@ -84,9 +87,11 @@ struct ContactModel {
 // rows_i × rows_j corner and d_free keeps the leading rows of each contact. For rigid
 // contacts W = J M⁻¹ Jᵀ row by row, so this is exactly the problem the scene would build if
 // it asked each contact for those rows only. The body form, if any, is dropped.
-inline lcs::core::Problem deriveProblem(const lcs::core::Problem& src, const std::vector<ContactModel>& models) {
+inline lcs::core::Problem deriveProblem(const lcs::core::Problem& src,
+                                        const std::vector<ContactModel>& models) {
   const int nc = static_cast<int>(src.contacts.size());
-  if (static_cast<int>(models.size()) != nc) throw std::invalid_argument("deriveProblem: one model per contact");
+  if (static_cast<int>(models.size()) != nc)
+    throw std::invalid_argument("deriveProblem: one model per contact");
   const std::vector<int> off = src.rowOffsets();
   lcs::core::Problem out;
   out.name = src.name;
@@ -94,7 +99,8 @@ inline lcs::core::Problem deriveProblem(const lcs::core::Problem& src, const std
   std::vector<int> sizes(nc), keep_rows;
   for (int i = 0; i < nc; ++i) {
     const ContactModel& m = models[i];
-    if (m.rows > src.contacts[i].rows) throw std::invalid_argument("deriveProblem: more rows than the source has");
+    if (m.rows > src.contacts[i].rows)
+      throw std::invalid_argument("deriveProblem: more rows than the source has");
     lcs::core::Contact& c = out.contacts[i];
     c.type = m.type;
     c.rows = m.rows;
@@ -161,8 +167,8 @@ struct SweepAcc {
   lcs::core::SolveResult result;  // of the fastest long run
 };
 
-inline void sweepRound(const lcs::core::Problem& problem, lcs::core::SolverParams params, int sweeps, SweepAcc* acc,
-                       double min_total = 0.02, int min_pairs = 2, int warm = 5) {
+inline void sweepRound(const lcs::core::Problem& problem, lcs::core::SolverParams params, int sweeps,
+                       SweepAcc* acc, double min_total = 0.02, int min_pairs = 2, int warm = 5) {
   params.stopping_rule = lcs::core::StoppingRule::kSofa;
   params.tolerance = 1e-300;
   params.time_budget = 0.0;
@@ -193,8 +199,8 @@ struct SweepTiming {
   double per_sweep = std::numeric_limits<double>::quiet_NaN();  // s, whole solve / sweeps
   double marginal = std::numeric_limits<double>::quiet_NaN();   // s
   double setup = std::numeric_limits<double>::quiet_NaN();      // s
-  int sweeps = 0;        // of the long run
-  std::string solver;    // what ran
+  int sweeps = 0;                                               // of the long run
+  std::string solver;                                           // what ran
   lcs::core::SolveResult result;
 };
 
@@ -223,8 +229,8 @@ void interleavedRounds(int rounds, std::size_t variants, Measure&& measure) {
 
 // Parameters of a cold solve to `tolerance` (no warm start), capped by `time_budget` s and
 // `max_iterations`, for solveRound.
-inline lcs::core::SolverParams toleranceParams(lcs::core::SolverKind solver, double tolerance, double time_budget,
-                                         int max_iterations) {
+inline lcs::core::SolverParams toleranceParams(lcs::core::SolverKind solver, double tolerance,
+                                               double time_budget, int max_iterations) {
   lcs::core::SolverParams params;
   params.solver = solver;
   params.tolerance = tolerance;
@@ -243,8 +249,8 @@ struct SolveAcc {
   lcs::core::SolveResult result;
 };
 
-inline void solveRound(const lcs::core::Problem& problem, const lcs::core::SolverParams& params, SolveAcc* acc,
-                       double min_total = 0.01, double single_run = 0.3) {
+inline void solveRound(const lcs::core::Problem& problem, const lcs::core::SolverParams& params,
+                       SolveAcc* acc, double min_total = 0.01, double single_run = 0.3) {
   if (acc->runs > 0 && acc->best > single_run) return;
   double total = 0.0;
   do {

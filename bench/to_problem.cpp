@@ -4,9 +4,9 @@
 // validateProblem and without it (validate=false: what CycleSolver calls, the core's solve
 // runs the same check).
 //   to_problem_bench
-#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include <chrono>
 #include <cstdio>
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 namespace lcs = lcp_contact_solver;
 int main() {
   for (int n : {100, 1000}) {
@@ -39,9 +39,13 @@ int main() {
           lcs::core::Problem p;
           std::vector<lcp_contact_solver_ros::ContactFrame> frames;
           const std::string err = lcp_contact_solver_ros::toProblem(a, w, 0, &p, &frames, validate);
-          if (!err.empty()) { std::printf("error: %s\n", err.c_str()); return 1; }
+          if (!err.empty()) {
+            std::printf("error: %s\n", err.c_str());
+            return 1;
+          }
         }
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / 20);
+        best =
+            std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / 20);
       }
       std::printf("%d contacts: toProblem %.1f us (%s)\n", n, 1e6 * best,
                   validate ? "with validateProblem" : "validate=false, as CycleSolver");

@@ -40,7 +40,9 @@ std::vector<int> parseList(const std::string& s) {
   return out;
 }
 
-double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+double seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
 
 struct Timing {
   double total = 0.0;  // best of 3, s
@@ -65,11 +67,13 @@ Timing timeSolve(const lcs::core::Problem& problem, lcs::core::SolverParams para
 
 std::size_t bytesOf(const lcs::core::BlockSparseMatrix& W) {
   return W.values.size() * sizeof(double) +
-         (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) * sizeof(int);
+         (W.block_col.size() + W.value_start.size() + W.row_start.size() + W.block_offset.size()) *
+             sizeof(int);
 }
 
 std::size_t bytesOf(const lcs::core::BodyCompliance& B) {
-  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) + B.contacts.size() * sizeof(lcs::core::ContactJacobian);
+  return B.body_compliance.size() * sizeof(lcs::core::BodyMatrix) +
+         B.contacts.size() * sizeof(lcs::core::ContactJacobian);
 }
 
 double relDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
@@ -93,12 +97,18 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--bases") bases = parseList(next());
-    else if (a == "--balls") balls = parseList(next());
-    else if (a == "--steps") steps = std::stoi(next());
-    else if (a == "--sweeps") sweeps = std::stoi(next());
-    else if (a == "--dense-max-rows") dense_max_rows = std::stoi(next());
-    else if (a == "--out") out_path = next();
+    if (a == "--bases")
+      bases = parseList(next());
+    else if (a == "--balls")
+      balls = parseList(next());
+    else if (a == "--steps")
+      steps = std::stoi(next());
+    else if (a == "--sweeps")
+      sweeps = std::stoi(next());
+    else if (a == "--dense-max-rows")
+      dense_max_rows = std::stoi(next());
+    else if (a == "--out")
+      out_path = next();
     else {
       std::cerr << "usage: unbuilt_scaling [--bases 4,8] [--balls 100,300] [--steps N] [--sweeps N] "
                    "[--dense-max-rows R] [--out FILE]\n";
@@ -119,7 +129,8 @@ int main(int argc, char** argv) {
   const int warm = 10;
 
   const auto t_gen = Clock::now();
-  std::vector<lcs_bench::SceneProblem> problems = lcs_bench::makeSceneProblems(LCS_SCENES_DIR, bases, balls, steps);
+  std::vector<lcs_bench::SceneProblem> problems =
+      lcs_bench::makeSceneProblems(LCS_SCENES_DIR, bases, balls, steps);
   std::cerr << "generated " << problems.size() << " problems in " << seconds(t_gen, Clock::now()) << " s\n";
 
   for (const lcs_bench::SceneProblem& sp : problems) {
@@ -142,7 +153,8 @@ int main(int argc, char** argv) {
       double assemble;
     };
     std::vector<Row> forms = {
-        {"block_sparse", &sparse, true, bytesOf(std::get<lcs::core::BlockSparseMatrix>(sparse.W)), assemble_sparse},
+        {"block_sparse", &sparse, true, bytesOf(std::get<lcs::core::BlockSparseMatrix>(sparse.W)),
+         assemble_sparse},
         {"unbuilt", &bodies, false, bytesOf(*bodies.bodies), 0.0},
     };
     lcs::core::Problem dense;
@@ -150,8 +162,9 @@ int main(int argc, char** argv) {
       t0 = Clock::now();
       dense = sparse;
       dense.W = std::get<lcs::core::BlockSparseMatrix>(sparse.W).toDense();
-      forms.insert(forms.begin(), Row{"dense", &dense, true, static_cast<std::size_t>(rows) * rows * sizeof(double),
-                                      assemble_sparse + seconds(t0, Clock::now())});
+      forms.insert(forms.begin(),
+                   Row{"dense", &dense, true, static_cast<std::size_t>(rows) * rows * sizeof(double),
+                       assemble_sparse + seconds(t0, Clock::now())});
     }
     Eigen::VectorXd reference;
     std::vector<std::string> lines;
@@ -161,12 +174,14 @@ int main(int argc, char** argv) {
       p.build_lcp = f.build_lcp;
       const Timing short_run = timeSolve(*f.problem, p, warm);
       const Timing long_run = timeSolve(*f.problem, p, warm + sweeps);
-      if (f.build_lcp == long_run.result.unbuilt) std::cerr << sp.name << " " << f.form << ": wrong path taken\n";
+      if (f.build_lcp == long_run.result.unbuilt)
+        std::cerr << sp.name << " " << f.form << ": wrong path taken\n";
       const double sweep = std::max(0.0, (long_run.total - short_run.total) / sweeps);
       const double setup = std::max(0.0, short_run.total - warm * sweep);
       char line[512];
-      std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%s,%zu,%.4f,%.4f,%.3f,%.5f,", sp.name.c_str(), sp.bodies, nc, rows,
-                    f.form.c_str(), f.bytes, 1e3 * f.assemble, 1e3 * setup, 1e6 * sweep, 1e6 * sweep / rows);
+      std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%s,%zu,%.4f,%.4f,%.3f,%.5f,", sp.name.c_str(), sp.bodies,
+                    nc, rows, f.form.c_str(), f.bytes, 1e3 * f.assemble, 1e3 * setup, 1e6 * sweep,
+                    1e6 * sweep / rows);
       lines.push_back(line);
       forces.push_back(long_run.result.forces);
       if (f.form == "block_sparse") reference = long_run.result.forces;

@@ -13,8 +13,8 @@
 //
 // The parts: work_precision_problems.cpp (what is measured), work_precision_runs.cpp (our
 // solvers and the peers, the CSV), auto_regret_table.cpp (the table).
-#include "auto_regret_table.h"
 #include "work_precision.h"
+#include "auto_regret_table.h"
 
 #include <algorithm>
 #include <chrono>
@@ -36,7 +36,8 @@ std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
   std::string item;
-  while (std::getline(ss, item, ',')) if (!item.empty()) out.push_back(item);
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
   return out;
 }
 
@@ -58,27 +59,38 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
       return argv[++i];
     };
     try {
-      if (a == "--problems") opt.problems_dir = value();
-      else if (a == "--scenes") opt.scenes_dir = value();
-      else if (a == "--out") opt.out = value();
-      else if (a == "--regret") opt.regret = value();
-      else if (a == "--budget") opt.budget = std::stod(value());
-      else if (a == "--filter") opt.filter = value();
+      if (a == "--problems")
+        opt.problems_dir = value();
+      else if (a == "--scenes")
+        opt.scenes_dir = value();
+      else if (a == "--out")
+        opt.out = value();
+      else if (a == "--regret")
+        opt.regret = value();
+      else if (a == "--budget")
+        opt.budget = std::stod(value());
+      else if (a == "--filter")
+        opt.filter = value();
       else if (a == "--tolerances") {
         opt.tolerances.clear();
         for (const std::string& t : split(value())) opt.tolerances.push_back(std::stod(t));
-      }
-      else if (a == "--families") { const auto v = split(value()); opt.families = {v.begin(), v.end()}; }
-      else if (a == "--solvers") { const auto v = split(value()); opt.solvers = {v.begin(), v.end()}; }
-      else if (a == "--quick") {
+      } else if (a == "--families") {
+        const auto v = split(value());
+        opt.families = {v.begin(), v.end()};
+      } else if (a == "--solvers") {
+        const auto v = split(value());
+        opt.solvers = {v.begin(), v.end()};
+      } else if (a == "--quick") {
         opt.tolerances = {1e-2, 1e-4, 1e-6, 1e-8};
         opt.pyramid_bases = {2, 5};
         opt.pile_balls = {12};
         opt.budget = std::min(opt.budget, 1.0);
         opt.min_repeats = 1;
         opt.min_time = 0.0;
-      } else if (a == "--help" || a == "-h") return usage("work-precision benchmark"), 0;
-      else return usage(("unknown argument " + a).c_str());
+      } else if (a == "--help" || a == "-h")
+        return usage("work-precision benchmark"), 0;
+      else
+        return usage(("unknown argument " + a).c_str());
     } catch (const std::exception& e) {
       return usage(e.what());
     }
@@ -124,8 +136,8 @@ void runProblem(const wp::Options& opt, const wp::BenchProblem& bp, std::vector<
     }
     wp::runPeer(opt, bp, *peer, csv);
   }
-  std::cerr << bp.family << "/" << bp.name << " (" << bp.problem.contacts.size() << " contacts): "
-            << std::chrono::duration<double>(Clock::now() - t0).count() << " s\n";
+  std::cerr << bp.family << "/" << bp.name << " (" << bp.problem.contacts.size()
+            << " contacts): " << std::chrono::duration<double>(Clock::now() - t0).count() << " s\n";
 }
 
 }  // namespace

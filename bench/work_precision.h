@@ -32,11 +32,11 @@ struct Options {
   std::string scenes_dir = LCS_SCENES_DIR;
   std::string out = "bench/results/work_precision.csv";
   std::string regret = "bench/results/auto_regret.md";
-  double budget = 2.0;          // s, per solve
-  double min_time = 0.05;       // s, repeat until the repeats add up to this...
-  int min_repeats = 3;          // ...and at least this many
+  double budget = 2.0;     // s, per solve
+  double min_time = 0.05;  // s, repeat until the repeats add up to this...
+  int min_repeats = 3;     // ...and at least this many
   int max_repeats = 25;
-  double single_above = 0.5;    // s, a first run longer than this is not repeated
+  double single_above = 0.5;  // s, a first run longer than this is not repeated
   std::set<std::string> families = {"fc3d", "lcp", "scenes"};
   std::string filter;
   std::set<std::string> solvers;  // empty = all
@@ -58,10 +58,10 @@ struct OurSolver {
   lcs::core::SolverKind kind;
   lcs::core::FrictionModel model = lcs::core::FrictionModel::kCoulombDisc;
   double sor = 1.0;
-  bool direct = false;       // one setting, no tolerance (Lemke)
-  bool friction = true;      // runs on fc3d / scenes
-  bool lcp = true;           // runs on LCPs
-  int max_rows = 0;          // larger problems are not run (0 = no limit)
+  bool direct = false;   // one setting, no tolerance (Lemke)
+  bool friction = true;  // runs on fc3d / scenes
+  bool lcp = true;       // runs on LCPs
+  int max_rows = 0;      // larger problems are not run (0 = no limit)
 };
 
 // One measured setting: a row of the CSV.

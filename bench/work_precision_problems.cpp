@@ -1,14 +1,14 @@
 // The problems of the work-precision study: the fc3d and lcp problem files of the shared
 // problem folder, and the scene problems generated in-process (scene_problems.h).
-#include "work_precision.h"
 #include "scene_problems.h"
+#include "work_precision.h"
 
 #include "lcp_contact_solver/core/problem_io.h"
 
+#include <dirent.h>
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <dirent.h>
 #include <iostream>
 #include <limits>
 #include <string>
@@ -93,10 +93,11 @@ void addSceneProblems(const Options& opt, std::vector<BenchProblem>* out) {
       bp.problem = std::move(sp.problem);
       double min_dn = std::numeric_limits<double>::infinity();
       const std::vector<int> off = bp.problem.rowOffsets();
-      for (std::size_t c = 0; c < bp.problem.contacts.size(); ++c) min_dn = std::min(min_dn, bp.problem.d_free[off[c]]);
-      std::cerr << "scene problem " << bp.name << ": " << sp.bodies << " bodies, " << bp.problem.contacts.size()
-                << " contacts, " << bp.problem.rowCount() << " rows after " << sp.steps
-                << " steps, min normal d_free " << min_dn << " m\n";
+      for (std::size_t c = 0; c < bp.problem.contacts.size(); ++c)
+        min_dn = std::min(min_dn, bp.problem.d_free[off[c]]);
+      std::cerr << "scene problem " << bp.name << ": " << sp.bodies << " bodies, "
+                << bp.problem.contacts.size() << " contacts, " << bp.problem.rowCount() << " rows after "
+                << sp.steps << " steps, min normal d_free " << min_dn << " m\n";
       out->push_back(std::move(bp));
     }
     std::cerr << "scene problems generated in " << std::chrono::duration<double>(Clock::now() - t0).count()

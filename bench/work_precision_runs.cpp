@@ -22,7 +22,8 @@ namespace {
 // ---- the residual of every answer ---------------------------------------------------------
 
 double discResidual(const lcs::core::Problem& problem, const Eigen::VectorXd& forces) {
-  if (forces.size() != problem.rowCount() || !forces.allFinite()) return std::numeric_limits<double>::infinity();
+  if (forces.size() != problem.rowCount() || !forces.allFinite())
+    return std::numeric_limits<double>::infinity();
   Eigen::VectorXd d;
   lcs::core::multiply(problem.W, forces, d);
   d += problem.d_free;
@@ -32,7 +33,8 @@ double discResidual(const lcs::core::Problem& problem, const Eigen::VectorXd& fo
 // Natural map of the box friction model that Bullet solves: normal row as a unilateral row,
 // each tangent row boxed in [-mu max(λn, 0), mu max(λn, 0)] with the normal force fixed.
 double boxResidual(const lcs::core::Problem& problem, const Eigen::VectorXd& forces) {
-  if (forces.size() != problem.rowCount() || !forces.allFinite()) return std::numeric_limits<double>::infinity();
+  if (forces.size() != problem.rowCount() || !forces.allFinite())
+    return std::numeric_limits<double>::infinity();
   Eigen::VectorXd d;
   lcs::core::multiply(problem.W, forces, d);
   d += problem.d_free;
@@ -179,11 +181,14 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
     params.time_budget = opt.budget;
     params.initial_guess = false;
     lcs::core::SolveResult result;
-    timeRepeated(opt, [&] {
-      const auto t0 = Clock::now();
-      result = lcs::core::solveProblem(bp.problem, params);
-      return std::chrono::duration<double>(Clock::now() - t0).count();
-    }, &row);
+    timeRepeated(
+        opt,
+        [&] {
+          const auto t0 = Clock::now();
+          result = lcs::core::solveProblem(bp.problem, params);
+          return std::chrono::duration<double>(Clock::now() - t0).count();
+        },
+        &row);
     row.status = lcs::core::statusName(result.status);
     row.converged = result.converged;
     row.iterations = result.iterations;
@@ -193,8 +198,9 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
     if (std::abs(check - result.residual) > 1e-9 * std::max(1.0, check))
       std::cerr << "warning: " << bp.name << " " << s.name << ": core residual " << result.residual
                 << " vs recomputed " << check << "\n";
-    row.model_residual = result.friction_model == lcs::core::FrictionModel::kCoulombDisc ? result.residual
-                                                                                  : result.solver_error;
+    row.model_residual = result.friction_model == lcs::core::FrictionModel::kCoulombDisc
+                             ? result.residual
+                             : result.solver_error;
     writeRow(csv, row);
     // auto changes its kernel with the tolerance, so a failure at one setting says nothing
     // about the next.
@@ -251,12 +257,15 @@ void runPeer(const Options& opt, const BenchProblem& bp, Peer& peer, std::ostrea
     Setting run = setting;
     if (peer.sweep() == SweepKind::kTolerance) run.max_iterations = cap;
     PeerOutcome outcome;
-    timeRepeated(opt, [&] {
-      peer.beforeSolve();
-      const auto t0 = Clock::now();
-      outcome = peer.solve(run);
-      return std::chrono::duration<double>(Clock::now() - t0).count();
-    }, &row);
+    timeRepeated(
+        opt,
+        [&] {
+          peer.beforeSolve();
+          const auto t0 = Clock::now();
+          outcome = peer.solve(run);
+          return std::chrono::duration<double>(Clock::now() - t0).count();
+        },
+        &row);
     row.status = outcome.status;
     // The peers have no wall-clock budget: a run longer than ours may take is a time-out,
     // whatever the method says (our kernels stop at the budget with status time_budget).

@@ -53,8 +53,8 @@ std::string BodyCompliance::validate() const {
   }
   if (diagonal.size() != 0) {
     if (diagonal.size() != rowCount())
-      return "the body form's diagonal has " + std::to_string(diagonal.size()) + " values, the contacts have " +
-             std::to_string(rowCount()) + " rows";
+      return "the body form's diagonal has " + std::to_string(diagonal.size()) +
+             " values, the contacts have " + std::to_string(rowCount()) + " rows";
     if (!diagonal.allFinite()) return "the body form's diagonal holds a non-finite value";
   }
   return "";

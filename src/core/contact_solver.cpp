@@ -106,11 +106,11 @@ SolveResult ContactSolver::solveInPlace(Problem& problem) {
 // What the kernels solve, and what the result reports on. Holds pointers into itself: built
 // in place by prepare, never copied.
 struct ContactSolver::Prepared {
-  const Problem* stated = nullptr;   // after validation and stabilization
-  bool unbuilt = false;              // Gauss-Seidel on the body form, W never assembled
-  Problem assembled;                 // the body form's W, when the kernel needs it
-  const Problem* base = nullptr;     // reported on: `stated` or `assembled`
-  bool compact = false;              // μ = 0 tangent rows left out of `problem`
+  const Problem* stated = nullptr;  // after validation and stabilization
+  bool unbuilt = false;             // Gauss-Seidel on the body form, W never assembled
+  Problem assembled;                // the body form's W, when the kernel needs it
+  const Problem* base = nullptr;    // reported on: `stated` or `assembled`
+  bool compact = false;             // μ = 0 tangent rows left out of `problem`
   Compaction compaction;
   const Problem* problem = nullptr;  // solved: `base` or `compaction.reduced`
   SolveContext ctx;
@@ -128,8 +128,8 @@ bool runsUnbuilt(SolverKind kind) {
 }
 
 // minW: a contact whose normal self-compliance (regularized) is at most minW gets no force.
-std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<int>& offsets,
-                                    double min_w, double regularization) {
+std::vector<bool> contactsBelowMinW(const Problem& problem, const std::vector<int>& offsets, double min_w,
+                                    double regularization) {
   std::vector<bool> ignored(problem.contacts.size(), false);
   if (min_w <= 0.0) return ignored;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
@@ -195,9 +195,11 @@ void ContactSolver::prepare(const Problem& stated, Clock::time_point start, Prep
 
 // Only nlgs has the local step of torsional and rolling contacts: every other kernel refuses
 // them, with zero forces and the residual of those forces.
-bool ContactSolver::refusesExtendedFriction(const Prepared& p, Clock::time_point start, SolveResult& result) const {
+bool ContactSolver::refusesExtendedFriction(const Prepared& p, Clock::time_point start,
+                                            SolveResult& result) const {
   const SolverKind kind = params_.solver;
-  if (kind == SolverKind::kNlgs || kind == SolverKind::kAuto || !hasExtendedFriction(*p.problem)) return false;
+  if (kind == SolverKind::kNlgs || kind == SolverKind::kAuto || !hasExtendedFriction(*p.problem))
+    return false;
   const Problem& base = *p.base;
   result.status = SolveStatus::kNotApplicable;
   result.message = std::string(solverName(kind)) +
@@ -241,8 +243,10 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
     report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
     report.friction_model = pass.friction_model;
     for (const auto& stage : pass.stages) {  // auto: consecutive slices of one member are one stage
-      if (!result.stages.empty() && result.stages.back().first == stage.first) result.stages.back().second += stage.second;
-      else result.stages.push_back(stage);
+      if (!result.stages.empty() && result.stages.back().first == stage.first)
+        result.stages.back().second += stage.second;
+      else
+        result.stages.push_back(stage);
     }
     if (failedToRun(pass.status) || pass.status == SolveStatus::kTimeBudget || params_.maxF <= 0.0) break;
     if (dropContactsAboveMaxF(ctx, lambda, params_.maxF) == 0) break;
@@ -319,7 +323,8 @@ void ContactSolver::explainResult(const Prepared& p, SolveResult& result) const 
   if (pyramidModel(params_) && result.friction_model == FrictionModel::kCoulombDisc && p.ctx.hasFriction() &&
       !failedToRun(result.status)) {
     appendNote(result.message, std::string("friction_model ") + frictionModelName(params_.friction_model) +
-                                   " applies to pgs and lemke; " + result.solver + " solved the Coulomb disc");
+                                   " applies to pgs and lemke; " + result.solver +
+                                   " solved the Coulomb disc");
   }
   if (result.friction_model != FrictionModel::kCoulombDisc && result.converged) {
     // "converged" is about the law that was solved; say so, since `residual` (Coulomb's
@@ -333,12 +338,14 @@ void ContactSolver::explainResult(const Prepared& p, SolveResult& result) const 
   if (params_.build_lcp) return;
   const Problem& stated = *p.stated;
   if (p.unbuilt) {
-    appendNote(result.message, "unbuilt solve on the body form (" + std::to_string(stated.bodies->bodyCount()) + " bodies)");
+    appendNote(result.message,
+               "unbuilt solve on the body form (" + std::to_string(stated.bodies->bodyCount()) + " bodies)");
   } else if (stated.bodies) {
     appendNote(result.message, std::string("build_lcp=false: ") + solverName(params_.solver) +
                                    " needs the assembled W; assembled it from the body form (block-sparse)");
   } else {
-    appendNote(result.message, "build_lcp=false needs the body form of the compliance; solved on the assembled W");
+    appendNote(result.message,
+               "build_lcp=false needs the body form of the compliance; solved on the assembled W");
   }
 }
 

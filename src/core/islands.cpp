@@ -112,8 +112,9 @@ class ThreadPool {
 
 // The kernel could not run or ended on something that is not an approximate solution.
 bool failure(SolveStatus s) {
-  return s == SolveStatus::kZeroDiagonal || s == SolveStatus::kNotApplicable || s == SolveStatus::kRayTermination ||
-         s == SolveStatus::kNumericalFailure || s == SolveStatus::kInvalidInput;
+  return s == SolveStatus::kZeroDiagonal || s == SolveStatus::kNotApplicable ||
+         s == SolveStatus::kRayTermination || s == SolveStatus::kNumericalFailure ||
+         s == SolveStatus::kInvalidInput;
 }
 
 // Kernels name contacts "contact K (id N)" by their index in the problem they were given:
@@ -161,13 +162,16 @@ Islands findIslands(const Problem& problem) {
     for (int i = 0; i < nc; ++i)
       for (int b : {B.contacts[i].body_a, B.contacts[i].body_b}) {
         if (b < 0) continue;
-        if (first_contact[b] < 0) first_contact[b] = i;
-        else sets.unite(first_contact[b], i);
+        if (first_contact[b] < 0)
+          first_contact[b] = i;
+        else
+          sets.unite(first_contact[b], i);
       }
   } else if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
     const std::vector<int> offsets = problem.rowOffsets();
     std::vector<int> contact_of(offsets.back());
-    for (int i = 0; i < nc; ++i) std::fill(contact_of.begin() + offsets[i], contact_of.begin() + offsets[i + 1], i);
+    for (int i = 0; i < nc; ++i)
+      std::fill(contact_of.begin() + offsets[i], contact_of.begin() + offsets[i + 1], i);
     const int n = static_cast<int>(dense->rows());
     for (int c = 0; c < n; ++c) {
       const double* col = dense->data() + static_cast<std::ptrdiff_t>(c) * n;
@@ -235,7 +239,8 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
       for (int* b : {&c.body_a, &c.body_b}) {
         if (*b < 0) continue;
         const auto it = local_body.emplace(*b, static_cast<int>(sub->body_compliance.size())).first;
-        if (it->second == static_cast<int>(sub->body_compliance.size())) sub->body_compliance.push_back(B.body_compliance[*b]);
+        if (it->second == static_cast<int>(sub->body_compliance.size()))
+          sub->body_compliance.push_back(B.body_compliance[*b]);
         *b = it->second;
       }
       sub->contacts.push_back(std::move(c));
@@ -257,7 +262,8 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
   // value_start[row_start[i]] to the next row's): no regrowth while copying.
   std::size_t blocks = 0, values = 0;
   const auto valueAt = [&](int b) {
-    return b < static_cast<int>(W.value_start.size()) ? static_cast<std::size_t>(W.value_start[b]) : W.values.size();
+    return b < static_cast<int>(W.value_start.size()) ? static_cast<std::size_t>(W.value_start[b])
+                                                      : W.values.size();
   };
   for (int i : contacts) {
     blocks += W.row_start[i + 1] - W.row_start[i];
@@ -281,8 +287,10 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
       R.block_col[nb] = position[col];
       R.value_start[nb++] = static_cast<int>(nv);
       const double* v = W.values.data() + W.value_start[b];
-      if (size == 1) R.values[nv] = *v;  // scalar rows: no copy call per entry
-      else std::copy_n(v, size, R.values.data() + nv);
+      if (size == 1)
+        R.values[nv] = *v;  // scalar rows: no copy call per entry
+      else
+        std::copy_n(v, size, R.values.data() + nv);
       nv += size;
     }
     R.row_start.push_back(static_cast<int>(nb));
@@ -296,7 +304,8 @@ Problem buildIsland(const Problem& problem, const std::vector<int>& offsets, con
 
 }  // namespace
 
-Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts) {
+Problem islandProblem(const Problem& problem, const std::vector<int>& offsets,
+                      const std::vector<int>& contacts) {
   std::vector<int> island_of(problem.contacts.size(), 1), position(problem.contacts.size(), -1);
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     island_of[contacts[k]] = 0;

@@ -51,9 +51,7 @@ KernelReport honestLemke(KernelReport report, const SolverParams& params) {
 
 }  // namespace
 
-bool pyramidModel(const SolverParams& params) {
-  return params.friction_model != FrictionModel::kCoulombDisc;
-}
+bool pyramidModel(const SolverParams& params) { return params.friction_model != FrictionModel::kCoulombDisc; }
 
 bool hasExtendedFriction(const Problem& problem) {
   for (const Contact& c : problem.contacts)

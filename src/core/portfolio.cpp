@@ -44,20 +44,20 @@ constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pa
 constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
 constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
 constexpr int kAutoNewtonRowsTight = 1000;
-constexpr int kAutoSmallRows = 200;            // loose tolerance: nlgs first up to this size
-constexpr double kAutoDominant = 1.0;          // normal coupling below this: diagonally dominant
-constexpr double kAutoRedundant = 0.9;         // normal rows this parallel (W metric): same body pair
-constexpr double kAutoRedundantShare = 0.25;   // this share of such contacts: W taken as rank-deficient
-constexpr int kAutoLemkeRows = 1000;           // LCPs up to this size may start with Lemke
+constexpr int kAutoSmallRows = 200;           // loose tolerance: nlgs first up to this size
+constexpr double kAutoDominant = 1.0;         // normal coupling below this: diagonally dominant
+constexpr double kAutoRedundant = 0.9;        // normal rows this parallel (W metric): same body pair
+constexpr double kAutoRedundantShare = 0.25;  // this share of such contacts: W taken as rank-deficient
+constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start with Lemke
 // Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
 // below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;
-constexpr double kAutoStrongDominant = 0.25;   // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
 
 struct AutoFeatures {
   int rows = 0;
-  double coupling = 0.0;       // mean normal off-diagonal / diagonal ratio
+  double coupling = 0.0;        // mean normal off-diagonal / diagonal ratio
   bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
   bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
   bool sparse = false;          // block-sparse W
@@ -90,7 +90,8 @@ Coupling normalCoupling(const SolveContext& ctx) {
   }
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
-    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j])) redundant[i] = true;
+    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j]))
+      redundant[i] = true;
   };
   if (dense) {
     for (int j = 0; j < nc; ++j) {
@@ -167,13 +168,15 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
   // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
   // Gauss-Seidel first at any tolerance and size.
-  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
+    return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
     if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
     return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   }
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
-  if (f.coupling < kAutoStrongDominant && !f.rank_deficient) return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
+  if (f.coupling < kAutoStrongDominant && !f.rank_deficient)
+    return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
   if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
@@ -254,7 +257,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       member.deadline = t0 + (ctx.deadline - t0) / 2;
     }
     if (ctx.problem->bodies && kind != SolverKind::kNlgs && kind != SolverKind::kPgs) {
-      if (assembled.contacts.empty() && !ctx.problem->contacts.empty()) assembled = assembledProblem(*ctx.problem);
+      if (assembled.contacts.empty() && !ctx.problem->contacts.empty())
+        assembled = assembledProblem(*ctx.problem);
       member.problem = &assembled;
     }
     // From the best iterate; a member that could not move from it at all runs once more
@@ -271,20 +275,22 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     zeroInactiveRows(ctx, x);
     const bool kernel_measured_x = x == returned_rows;
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (stages->empty() || stages->back().first != solverName(kind)) stages->emplace_back(solverName(kind), 0.0);
+    if (stages->empty() || stages->back().first != solverName(kind))
+      stages->emplace_back(solverName(kind), 0.0);
     stages->back().second += seconds;
     report.history.insert(report.history.end(), r.history.begin(), r.history.end());
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
     // (a pyramid's own residual for a pyramid); otherwise measure it.
-    const bool own_measure =
-        (by_residual || pyramid) && !failedToRun(r.status) && std::isfinite(r.solver_error) && kernel_measured_x;
+    const bool own_measure = (by_residual || pyramid) && !failedToRun(r.status) &&
+                             std::isfinite(r.solver_error) && kernel_measured_x;
     double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()
                       : own_measure  ? r.solver_error
                                      : ctx.residual(x);
     if (!std::isfinite(residual)) residual = std::numeric_limits<double>::infinity();
-    const bool converged = r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
+    const bool converged =
+        r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
     if (residual < best_residual || converged) {
       best_residual = residual;
       best = x;
@@ -297,12 +303,14 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (ctx.deadlinePassed()) {
       report.status = SolveStatus::kTimeBudget;
-      report.message = "auto: time budget (" + std::to_string(params.time_budget) + " s) ran out; best iterate returned";
+      report.message =
+          "auto: time budget (" + std::to_string(params.time_budget) + " s) ran out; best iterate returned";
       break;
     }
     if (used >= params.maxIt) {
       report.status = SolveStatus::kMaxIterations;
-      report.message = "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
+      report.message =
+          "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
       break;
     }
     if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
@@ -321,7 +329,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(kind) * start_residual;
     rate[m] = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
     tried[m] = true;
-    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin) retry_origin[m] = 1;
+    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin)
+      retry_origin[m] = 1;
     if (progressing) {
       slice[m] = std::min(2 * slice[m], 1 << 28);
       continue;

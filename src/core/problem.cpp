@@ -66,7 +66,8 @@ std::string BlockSparseMatrix::validate() const {
       if (last_row_seen[j] == i)
         return "block-sparse W: block (" + std::to_string(i) + ", " + std::to_string(j) + ") stored twice";
       last_row_seen[j] = i;
-      if (value_start[k] != static_cast<int>(expected_value)) return "block-sparse W: block values not contiguous";
+      if (value_start[k] != static_cast<int>(expected_value))
+        return "block-sparse W: block values not contiguous";
       expected_value += static_cast<std::size_t>(ri) * (block_offset[j + 1] - block_offset[j]);
     }
   }
@@ -265,27 +266,31 @@ std::string validateContacts(const Problem& problem) {
     if (repeats && !ids.insert(c.id).second) return name() + " repeats the id of an earlier contact";
     switch (c.type) {
       case ContactType::kFrictional:
-        if (c.rows != 3) return name() + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";
+        if (c.rows != 3)
+          return name() + " is frictional but has " + std::to_string(c.rows) + " rows (3 expected)";
         break;
       case ContactType::kFrictionless:
-        if (c.rows != 1) return name() + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
+        if (c.rows != 1)
+          return name() + " is frictionless but has " + std::to_string(c.rows) + " rows (1 expected)";
         break;
       case ContactType::kTorsional:
       case ContactType::kRolling:
         if (c.rows != rowsForType(c.type))
-          return name() + " is " + (c.type == ContactType::kTorsional ? "torsional" : "rolling") + " but has " +
-                 std::to_string(c.rows) + " rows (" + std::to_string(rowsForType(c.type)) + " expected)";
+          return name() + " is " + (c.type == ContactType::kTorsional ? "torsional" : "rolling") +
+                 " but has " + std::to_string(c.rows) + " rows (" + std::to_string(rowsForType(c.type)) +
+                 " expected)";
         break;
       case ContactType::kBilateral:
-        if (c.rows < 1 || c.rows > 6) return name() + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
+        if (c.rows < 1 || c.rows > 6)
+          return name() + " is bilateral with " + std::to_string(c.rows) + " rows (1..6 expected)";
         break;
-      default:
-        return name() + " has an unknown type " + std::to_string(static_cast<int>(c.type));
+      default: return name() + " has an unknown type " + std::to_string(static_cast<int>(c.type));
     }
     if (std::isnan(c.mu) || std::isinf(c.mu)) return name() + " has a non-finite mu";
     // Negative means "use the default": only exactly the sentinel range is allowed, so a
     // typo like -0.3 is not silently replaced by the default.
-    if (c.mu < 0.0 && c.mu != -1.0) return name() + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
+    if (c.mu < 0.0 && c.mu != -1.0)
+      return name() + " has a negative mu " + std::to_string(c.mu) + " (use -1 for the default)";
     if (!std::isfinite(c.mu_torsional) || c.mu_torsional < 0.0)
       return name() + " has a negative or non-finite torsional friction coefficient";
     if (!std::isfinite(c.mu_rolling) || c.mu_rolling < 0.0)
@@ -310,9 +315,9 @@ std::string validateBodyForm(const Problem& problem) {
            std::to_string(problem.contacts.size());
   for (std::size_t i = 0; i < problem.contacts.size(); ++i)
     if (bodies.contacts[i].rows != problem.contacts[i].rows)
-      return "the body form gives contact " + std::to_string(i) + " (id " + std::to_string(problem.contacts[i].id) +
-             ") " + std::to_string(bodies.contacts[i].rows) + " rows, the contact has " +
-             std::to_string(problem.contacts[i].rows);
+      return "the body form gives contact " + std::to_string(i) + " (id " +
+             std::to_string(problem.contacts[i].id) + ") " + std::to_string(bodies.contacts[i].rows) +
+             " rows, the contact has " + std::to_string(problem.contacts[i].rows);
   return bodies.validate();
 }
 
@@ -323,14 +328,17 @@ std::string validateProblem(const Problem& problem, int max_rows) {
   if (std::string err = validateContacts(problem); !err.empty()) return err;
   const long long rows = problem.rowCount();
   if (max_rows > 0 && rows > max_rows)
-    return "the problem has " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(max_rows);
+    return "the problem has " + std::to_string(rows) + " rows, more than the limit of " +
+           std::to_string(max_rows);
   if (problem.d_free.size() != rows)
-    return "d_free has " + std::to_string(problem.d_free.size()) + " entries, the contacts have " + std::to_string(rows) + " rows";
+    return "d_free has " + std::to_string(problem.d_free.size()) + " entries, the contacts have " +
+           std::to_string(rows) + " rows";
   if (!allFinite(problem.d_free.data(), problem.d_free.size())) return "d_free holds a non-finite value";
   if (problem.bodies) return validateBodyForm(problem);
   if (complianceRows(problem.W) != rows || complianceCols(problem.W) != rows)
-    return "W is " + std::to_string(complianceRows(problem.W)) + "x" + std::to_string(complianceCols(problem.W)) +
-           ", the contacts have " + std::to_string(rows) + " rows";
+    return "W is " + std::to_string(complianceRows(problem.W)) + "x" +
+           std::to_string(complianceCols(problem.W)) + ", the contacts have " + std::to_string(rows) +
+           " rows";
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
     if (!allFinite(dense->data(), dense->size())) return "W holds a non-finite value";
   } else {

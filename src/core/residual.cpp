@@ -46,9 +46,7 @@ std::vector<double> effectiveMu(const Problem& problem, double default_mu) {
 
 namespace {
 
-bool isIgnored(const std::vector<bool>& ignored, std::size_t i) {
-  return !ignored.empty() && ignored[i];
-}
+bool isIgnored(const std::vector<bool>& ignored, std::size_t i) { return !ignored.empty() && ignored[i]; }
 
 // Torsional and rolling rows: the force minus its projection onto the bound μ_x λ_n after
 // a step against its velocity (the natural map of maximal dissipation with λ_n given).
@@ -138,8 +136,8 @@ double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
                           const std::vector<bool>& ignored) {
   const double q_norm = problem.d_free.norm();
   if (std::isfinite(q_norm)) {
-    const double residual = std::sqrt(errorSum(problem, mu, lambda.data(), d.data(), ignored)) /
-                            (q_norm > 0.0 ? q_norm : 1.0);
+    const double residual =
+        std::sqrt(errorSum(problem, mu, lambda.data(), d.data(), ignored)) / (q_norm > 0.0 ? q_norm : 1.0);
     if (std::isfinite(residual)) return residual;
   }
   // Overflow, in |d_free| (entries near DBL_MAX) or in the squares of the errors (1e284):
@@ -158,8 +156,7 @@ double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
 }
 
 std::vector<ContactState> classifyContacts(const Problem& problem, const std::vector<double>& mu,
-                                           const Eigen::VectorXd& lambda,
-                                           const std::vector<bool>& ignored) {
+                                           const Eigen::VectorXd& lambda, const std::vector<bool>& ignored) {
   // A force within this fraction of the cone's radius counts as on the boundary.
   constexpr double kBoundaryFraction = 1e-6;
   std::vector<ContactState> states(problem.contacts.size(), ContactState::kOpen);
@@ -179,7 +176,8 @@ std::vector<ContactState> classifyContacts(const Problem& problem, const std::ve
     } else {
       const double radius = mu[i] * l[0];
       const double tangential = std::hypot(l[1], l[2]);
-      states[i] = tangential < radius * (1.0 - kBoundaryFraction) ? ContactState::kStick : ContactState::kSlip;
+      states[i] =
+          tangential < radius * (1.0 - kBoundaryFraction) ? ContactState::kStick : ContactState::kSlip;
     }
   }
   return states;

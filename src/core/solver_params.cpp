@@ -17,8 +17,8 @@ struct Named {
 };
 
 constexpr Named<SolverKind> kSolvers[] = {
-    {SolverKind::kAuto, "auto"},   {SolverKind::kPgs, "pgs"},       {SolverKind::kNlgs, "nlgs"},
-    {SolverKind::kLemke, "lemke"}, {SolverKind::kApgd, "apgd"},     {SolverKind::kNewton, "newton"},
+    {SolverKind::kAuto, "auto"},   {SolverKind::kPgs, "pgs"},   {SolverKind::kNlgs, "nlgs"},
+    {SolverKind::kLemke, "lemke"}, {SolverKind::kApgd, "apgd"}, {SolverKind::kNewton, "newton"},
     {SolverKind::kProx, "prox"},
 };
 constexpr Named<FrictionModel> kFrictionModels[] = {
@@ -67,7 +67,9 @@ bool parseSolverName(const std::string& name, SolverKind* kind) { return parseNa
 std::vector<std::string> solverNames() { return namesOf(kSolvers); }
 
 const char* stoppingRuleName(StoppingRule rule) { return nameOf(kStoppingRules, rule); }
-bool parseStoppingRule(const std::string& name, StoppingRule* rule) { return parseName(kStoppingRules, name, rule); }
+bool parseStoppingRule(const std::string& name, StoppingRule* rule) {
+  return parseName(kStoppingRules, name, rule);
+}
 
 const char* frictionModelName(FrictionModel model) { return nameOf(kFrictionModels, model); }
 bool parseFrictionModel(const std::string& name, FrictionModel* model) {
@@ -92,12 +94,14 @@ std::string validateParams(const SolverParams& p) {
   if (!std::isfinite(p.sor) || p.sor <= 0.0 || p.sor >= 2.0) return "sor must be a number in (0, 2)";
   if (!nonNegative(p.time_budget)) return "time_budget must be a finite number >= 0 (0 disables it)";
   if (p.threads < 0) return "threads must be >= 0 (0 = the core count)";
-  if (std::string(frictionModelName(p.friction_model)) == "unknown") return "friction_model is not a known model";
+  if (std::string(frictionModelName(p.friction_model)) == "unknown")
+    return "friction_model is not a known model";
   if (std::string(solverName(p.solver)) == "unknown") return "solver is not a known solver";
   if (!std::isfinite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be a number in [0, 1]";
   if (!nonNegative(p.softness)) return "softness must be a finite number >= 0";
   if (!nonNegative(p.time_step)) return "time_step must be a finite number >= 0";
-  if (std::string(constraintLevelName(p.constraint_level)) == "unknown") return "constraint_level is not a known level";
+  if (std::string(constraintLevelName(p.constraint_level)) == "unknown")
+    return "constraint_level is not a known level";
   return "";
 }
 

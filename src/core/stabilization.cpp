@@ -33,7 +33,8 @@ void addToDiagonal(const std::vector<int>& offsets, const std::vector<double>& a
   if (!missing) return;
   // Rare (a contact with no self-compliance stored): rebuild with the diagonal blocks added.
   std::vector<int> sizes(sparse.blockCount());
-  for (int i = 0; i < sparse.blockCount(); ++i) sizes[i] = sparse.block_offset[i + 1] - sparse.block_offset[i];
+  for (int i = 0; i < sparse.blockCount(); ++i)
+    sizes[i] = sparse.block_offset[i + 1] - sparse.block_offset[i];
   BlockSparseMatrix out = BlockSparseMatrix::withBlockSizes(sizes);
   for (int i = 0; i < sparse.blockCount(); ++i) {
     out.beginRow();
@@ -41,8 +42,9 @@ void addToDiagonal(const std::vector<int>& offsets, const std::vector<double>& a
     for (int b = sparse.row_start[i]; b < sparse.row_start[i + 1]; ++b) {
       const int j = sparse.block_col[b];
       found = found || j == i;
-      out.addBlock(j, Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-                          sparse.values.data() + sparse.value_start[b], sizes[i], sizes[j]));
+      out.addBlock(j,
+                   Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                       sparse.values.data() + sparse.value_start[b], sizes[i], sizes[j]));
     }
     if (!found && add[i] != 0.0) {
       Eigen::MatrixXd block = Eigen::MatrixXd::Zero(sizes[i], sizes[i]);
@@ -81,7 +83,8 @@ std::string applyStabilization(const SolverParams& params, Problem* problem) {
     const double beta = effectiveErp(c, params);
     if (c.gap < 0.0 && beta > 0.0) {
       if (velocity && params.time_step <= 0.0)
-        return "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) + ")";
+        return "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) +
+               ")";
       problem->d_free[offsets[i]] += velocity ? beta * c.gap / params.time_step : beta * c.gap;
     }
     softness[i] = effectiveSoftness(c, params);
@@ -113,7 +116,8 @@ bool applyStabilizationInPlace(const SolverParams& params, Problem* problem, Sta
     const double beta = effectiveErp(c, params);
     if (c.gap < 0.0 && beta > 0.0) {
       if (velocity && params.time_step <= 0.0) {
-        *error = "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) + ")";
+        *error =
+            "erp at constraint_level velocity needs time_step > 0 (contact id " + std::to_string(c.id) + ")";
         return true;
       }
       shift[i] = velocity ? beta * c.gap / params.time_step : beta * c.gap;

@@ -3,7 +3,8 @@
 namespace lcp_contact_solver::core {
 
 bool zeroFriction(const Contact& c, double default_mu) {
-  return c.type == ContactType::kFrictional && (c.mu == 0.0 || (c.mu == Contact::kMuDefault && default_mu == 0.0));
+  return c.type == ContactType::kFrictional &&
+         (c.mu == 0.0 || (c.mu == Contact::kMuDefault && default_mu == 0.0));
 }
 
 Compaction compactZeroFriction(const Problem& p, double default_mu) {

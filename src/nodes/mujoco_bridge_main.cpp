@@ -3,6 +3,7 @@
 #include "lcp_contact_solver/ros/sim/simulator_main.h"
 
 int main(int argc, char** argv) {
-  return lcp_contact_solver_ros::runSimulatorMain<lcp_contact_solver_ros::MujocoBridgeNode, std::runtime_error>(
-      argc, argv, "mujoco_bridge", "MuJoCo bridge stopped: ");
+  return lcp_contact_solver_ros::runSimulatorMain<lcp_contact_solver_ros::MujocoBridgeNode,
+                                                  std::runtime_error>(argc, argv, "mujoco_bridge",
+                                                                      "MuJoCo bridge stopped: ");
 }

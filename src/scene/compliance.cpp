@@ -205,7 +205,7 @@ std::vector<core::Contact> problemContacts(const Scene& scene, const std::vector
 }
 
 core::Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
-                     const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage) {
+                           const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage) {
   const RigidContactModel model(scene, frames);
   core::Problem p;
   p.name = scene.name;

@@ -55,10 +55,8 @@ std::shared_ptr<fcl::CollisionGeometryd> makeGeometry(const CollisionShape& s, d
   switch (s.type) {
     case ShapeType::kBox:
       return std::make_shared<fcl::Boxd>(s.size.x() + 2 * h, s.size.y() + 2 * h, s.size.z() + 2 * h);
-    case ShapeType::kSphere:
-      return std::make_shared<fcl::Sphered>(s.size.x() + h);
-    case ShapeType::kCylinder:
-      return std::make_shared<fcl::Cylinderd>(s.size.x() + h, s.size.y() + 2 * h);
+    case ShapeType::kSphere: return std::make_shared<fcl::Sphered>(s.size.x() + h);
+    case ShapeType::kCylinder: return std::make_shared<fcl::Cylinderd>(s.size.x() + h, s.size.y() + 2 * h);
   }
   return nullptr;
 }
@@ -74,8 +72,7 @@ Eigen::Vector3d clampToShape(const CollisionShape& shape, const Eigen::Isometry3
   const Eigen::Vector3d n_l = world_T_shape.linear().transpose() * n;
   Eigen::Vector3d q = world_T_shape.inverse() * p;
   switch (shape.type) {
-    case ShapeType::kSphere:
-      return p;  // inflated radially: no sideways error
+    case ShapeType::kSphere: return p;  // inflated radially: no sideways error
     case ShapeType::kBox: {
       Eigen::Index k = 0;
       if (n_l.cwiseAbs().maxCoeff(&k) < kAligned) return p;
@@ -214,7 +211,8 @@ std::vector<SceneContact> ContactGenerator::generate() {
       // FCL's normal points from o1 (A) to o2 (B); ours from B into A.
       Eigen::Vector3d n = -c.normal;
       const double len = n.norm();
-      if (!std::isfinite(len) || len < 1e-12 || !c.pos.allFinite() || !std::isfinite(c.penetration_depth)) continue;
+      if (!std::isfinite(len) || len < 1e-12 || !c.pos.allFinite() || !std::isfinite(c.penetration_depth))
+        continue;
       n /= len;
       const double gap = margin - c.penetration_depth;
       Eigen::Vector3d point = clampToShape(body_a.shapes[ga.shape], pose_a, n, c.pos);

@@ -76,7 +76,8 @@ class RowWalker {
         case mjCNSTR_CONTACT_PYRAMIDAL: error = pyramidal(e, &next); break;
         case mjCNSTR_CONTACT_ELLIPTIC: error = elliptic(e, &next); break;
         default:
-          return "efc row " + std::to_string(e) + " has an unknown constraint type " + std::to_string(d_->efc_type[e]);
+          return "efc row " + std::to_string(e) + " has an unknown constraint type " +
+                 std::to_string(d_->efc_type[e]);
       }
       if (!error.empty()) return error;
       e = next;
@@ -122,7 +123,8 @@ class RowWalker {
   std::string checkContactId(int e) const {
     const int id = d_->efc_id[e];
     if (id < 0 || id >= d_->ncon)
-      return "efc row " + std::to_string(e) + " names contact " + std::to_string(id) + " of " + std::to_string(d_->ncon);
+      return "efc row " + std::to_string(e) + " names contact " + std::to_string(id) + " of " +
+             std::to_string(d_->ncon);
     return "";
   }
 
@@ -136,7 +138,8 @@ class RowWalker {
       return "";
     }
     if (k > 6)
-      return "equality " + std::to_string(id) + " has " + std::to_string(k) + " rows (at most 6 fit a bilateral contact)";
+      return "equality " + std::to_string(id) + " has " + std::to_string(k) +
+             " rows (at most 6 fit a bilateral contact)";
     MujocoEntry entry;
     entry.kind = MujocoRowKind::kEquality;
     entry.efc_row = e;
@@ -179,7 +182,9 @@ class RowWalker {
     if (std::string error = checkContactId(e); !error.empty()) return error;
     const int id = d_->efc_id[e];
     const MujocoEntry entry = contactEntry(id, MujocoRowKind::kFrictionless, e);
-    add(entry, coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], -1), core::ContactType::kFrictionless, 1, 0.0),
+    add(entry,
+        coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], -1),
+                    core::ContactType::kFrictionless, 1, 0.0),
         {e}, {1.0});
     return "";
   }
@@ -206,7 +211,9 @@ class RowWalker {
         if (options_.scale_rows) s = edge.norm();
         entry.normal = edge.normalized();
       }  // torsion / rolling edges: a normal force with a torque; the normal is n
-      add(entry, coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], k), core::ContactType::kFrictionless, 1, 0.0),
+      add(entry,
+          coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], k),
+                      core::ContactType::kFrictionless, 1, 0.0),
           {e + k}, {s});
     }
     *next = e + edges;
@@ -228,7 +235,9 @@ class RowWalker {
     double s2 = 1.0;  // anisotropy: scale the second tangent so the cone is the disc of μ1
     if (options_.scale_rows && con.friction[1] > 0.0 && con.friction[1] != con.friction[0])
       s2 = con.friction[0] / con.friction[1];
-    add(entry, coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], -1), core::ContactType::kFrictional, 3, con.friction[0]),
+    add(entry,
+        coreContact(mujocoContactId(entry.geom1, entry.geom2, rank_[id], -1), core::ContactType::kFrictional,
+                    3, con.friction[0]),
         {e, e + 1, e + 2}, {1.0, 1.0, s2});
     for (int r = 3; r < con.dim; ++r) out_->dropped_rows.push_back(e + r);  // torsion, rolling
     *next = e + con.dim;
@@ -260,8 +269,9 @@ const char* mujocoRowKindName(MujocoRowKind kind) {
 // ---- ids ---------------------------------------------------------------------------------
 
 std::int64_t mujocoContactId(int geom1, int geom2, int rank, int edge) {
-  return (static_cast<std::int64_t>(geom1 & 0xFFFFF) << 36) | (static_cast<std::int64_t>(geom2 & 0xFFFFF) << 16) |
-         (static_cast<std::int64_t>(rank & 0x3FF) << 6) | static_cast<std::int64_t>((edge + 1) & 0x3F);
+  return (static_cast<std::int64_t>(geom1 & 0xFFFFF) << 36) |
+         (static_cast<std::int64_t>(geom2 & 0xFFFFF) << 16) | (static_cast<std::int64_t>(rank & 0x3FF) << 6) |
+         static_cast<std::int64_t>((edge + 1) & 0x3F);
 }
 
 std::int64_t mujocoLimitId(int constraint_type, int object) {
@@ -292,14 +302,17 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
   const bool block_sparse =
       options.storage == MujocoExtractOptions::Storage::kBlockSparse ||
       (options.storage == MujocoExtractOptions::Storage::kAuto && n > options.dense_max_rows);
-  if (block_sparse) out->problem.W = detail::blockSparseW(m, d, *out, row_of_efc);
-  else out->problem.W = detail::denseW(m, d, *out, row_of_efc);
+  if (block_sparse)
+    out->problem.W = detail::blockSparseW(m, d, *out, row_of_efc);
+  else
+    out->problem.W = detail::denseW(m, d, *out, row_of_efc);
   return "";
 }
 
 Eigen::VectorXd MujocoProblem::toEfcForce(const Eigen::VectorXd& lambda, const double* dropped_source) const {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(nefc);
-  for (int p = 0; p < static_cast<int>(efc_row.size()) && p < lambda.size(); ++p) f[efc_row[p]] = lambda[p] / row_scale[p];
+  for (int p = 0; p < static_cast<int>(efc_row.size()) && p < lambda.size(); ++p)
+    f[efc_row[p]] = lambda[p] / row_scale[p];
   if (dropped_source)
     for (int r : dropped_rows) f[r] = dropped_source[r];
   return f;

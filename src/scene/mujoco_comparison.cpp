@@ -23,7 +23,8 @@ Eigen::Vector3d contactFrameForce(const MujocoProblem& problem, const Eigen::Vec
         const double f = lambda[p] / problem.row_scale[p];
         const int j = entry.edge / 2;
         force[0] += f;
-        if (j < 2) force[1 + j] += (entry.edge % 2 == 0 ? 1.0 : -1.0) * d->contact[mj_contact].friction[j] * f;
+        if (j < 2)
+          force[1 + j] += (entry.edge % 2 == 0 ? 1.0 : -1.0) * d->contact[mj_contact].friction[j] * f;
         break;
       }
       case MujocoRowKind::kElliptic:
@@ -43,7 +44,8 @@ ForceComparison compareForces(const MujocoProblem& problem, const Eigen::VectorX
   const std::vector<int> offsets = problem.problem.rowOffsets();
   cmp.rows = static_cast<int>(problem.efc_row.size());
   double scale = 0.0;
-  for (int p = 0; p < cmp.rows; ++p) scale = std::max(scale, std::abs(problem.mujoco_lambda[p] / problem.row_scale[p]));
+  for (int p = 0; p < cmp.rows; ++p)
+    scale = std::max(scale, std::abs(problem.mujoco_lambda[p] / problem.row_scale[p]));
   for (std::size_t i = 0; i < problem.entries.size(); ++i) {
     double entry_max = 0.0;
     for (int p = offsets[i]; p < offsets[i + 1]; ++p) {

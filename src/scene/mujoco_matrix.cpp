@@ -52,7 +52,8 @@ std::vector<int> fillRows(const mjModel* m, const mjData* d, const MujocoExtract
   return row_of_efc;
 }
 
-Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& mp, const std::vector<int>& row_of_efc) {
+Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,
+                       const std::vector<int>& row_of_efc) {
   const int n = static_cast<int>(mp.efc_row.size());
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, n);
   for (int p = 0; p < n; ++p) {

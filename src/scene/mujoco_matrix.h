@@ -20,7 +20,8 @@ std::vector<int> fillRows(const mjModel* m, const mjData* d, const MujocoExtract
                           const std::vector<double>& scale_of_row, MujocoProblem* out);
 
 // W: AR restricted to the kept rows, scaled, dense.
-Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& mp, const std::vector<int>& row_of_efc);
+Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,
+                       const std::vector<int>& row_of_efc);
 
 // The same W block-sparse: one block per pair of coupled entries.
 core::BlockSparseMatrix blockSparseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,

@@ -33,7 +33,8 @@ const NameTable kJacobians = {{"dense", mjJAC_DENSE}, {"sparse", mjJAC_SPARSE}, 
 
 // `name`'s value in `table`; false with "unknown <what> '<name>' (a, b or c)" in `error`
 // (may be null) when the table has no such name.
-bool parseNamed(const std::string& name, const NameTable& table, const char* what, int* value, std::string* error) {
+bool parseNamed(const std::string& name, const NameTable& table, const char* what, int* value,
+                std::string* error) {
   for (const NamedValue& entry : table) {
     if (name != entry.name) continue;
     *value = entry.value;
@@ -91,8 +92,10 @@ std::unique_ptr<MujocoWorld> MujocoWorld::load(const std::string& path, const Mu
 
   char message[1000] = "";
   const bool binary = path.size() > 4 && path.compare(path.size() - 4, 4, ".mjb") == 0;
-  mjModel* m = binary ? mj_loadModel(path.c_str(), nullptr) : mj_loadXML(path.c_str(), nullptr, message, sizeof message);
-  if (!m) return fail(path + ": " + (message[0] ? std::string(message) : std::string("cannot load the model")));
+  mjModel* m = binary ? mj_loadModel(path.c_str(), nullptr)
+                      : mj_loadXML(path.c_str(), nullptr, message, sizeof message);
+  if (!m)
+    return fail(path + ": " + (message[0] ? std::string(message) : std::string("cannot load the model")));
   if (cone >= 0) m->opt.cone = cone;
   if (solver >= 0) m->opt.solver = solver;
   if (jacobian >= 0) m->opt.jacobian = jacobian;

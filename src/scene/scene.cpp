@@ -111,8 +111,8 @@ class Builder {
     throw SceneError(source_ + ": link '" + link + "': " + what);
   }
 
-  void visit(const urdf::LinkConstSharedPtr& link, const Eigen::Isometry3d& world_T_link,
-             bool is_static, std::vector<RigidBody>* out) {
+  void visit(const urdf::LinkConstSharedPtr& link, const Eigen::Isometry3d& world_T_link, bool is_static,
+             std::vector<RigidBody>* out) {
     RigidBody body;
     body.name = link->name;
     body.is_static = is_static;
@@ -125,19 +125,22 @@ class Builder {
     // Children in the order urdfdom lists them (sorted by joint name): deterministic.
     for (const urdf::JointSharedPtr& joint : link->child_joints) {
       const urdf::LinkConstSharedPtr child = model_.getLink(joint->child_link_name);
-      if (!child) failLink(joint->child_link_name, "is the child of joint '" + joint->name + "' but does not exist");
+      if (!child)
+        failLink(joint->child_link_name, "is the child of joint '" + joint->name + "' but does not exist");
       bool child_static = false;
       if (joint->type == urdf::Joint::FLOATING) {
         child_static = false;
       } else if (joint->type == urdf::Joint::FIXED) {
         if (!is_static)
           failLink(child->name, "is attached by the fixed joint '" + joint->name + "' to the dynamic link '" +
-                                    link->name + "': composite bodies are not supported (put the geometry "
+                                    link->name +
+                                    "': composite bodies are not supported (put the geometry "
                                     "in one link, or attach it with a floating joint)");
         child_static = true;
       } else {
         failLink(child->name, std::string("is attached by the ") + jointTypeName(joint->type) + " joint '" +
-                                  joint->name + "': a scene has only free bodies (floating joints) and "
+                                  joint->name +
+                                  "': a scene has only free bodies (floating joints) and "
                                   "static ones (fixed joints to static links)");
       }
       const Eigen::Isometry3d parent_T_child = jointOrigin(*joint);
@@ -168,7 +171,8 @@ class Builder {
       failLink(link.name, "is a free body (floating joint) but has no <inertial>: give its mass and inertia");
     const urdf::Inertial& in = *link.inertial;
     if (!std::isfinite(in.mass) || in.mass <= 0.0)
-      failLink(link.name, "is a free body with mass " + std::to_string(in.mass) + ": the mass must be > 0 (kg)");
+      failLink(link.name,
+               "is a free body with mass " + std::to_string(in.mass) + ": the mass must be > 0 (kg)");
     Eigen::Matrix3d I;
     I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
     if (!I.allFinite()) failLink(link.name, "has a non-finite inertia");
@@ -213,14 +217,14 @@ class Builder {
           const auto& cyl = static_cast<const urdf::Cylinder&>(g);
           shape.type = ShapeType::kCylinder;
           shape.size = Eigen::Vector3d(cyl.radius, cyl.length, 0.0);
-          if (!std::isfinite(cyl.radius) || !std::isfinite(cyl.length) || cyl.radius <= 0.0 || cyl.length <= 0.0)
+          if (!std::isfinite(cyl.radius) || !std::isfinite(cyl.length) || cyl.radius <= 0.0 ||
+              cyl.length <= 0.0)
             failLink(link.name, "has a collision cylinder with radius or length <= 0");
           break;
         }
         case urdf::Geometry::MESH:
           failLink(link.name, "has unsupported collision geometry 'mesh' (supported: box, sphere, cylinder)");
-        default:
-          failLink(link.name, "has unsupported collision geometry (supported: box, sphere, cylinder)");
+        default: failLink(link.name, "has unsupported collision geometry (supported: box, sphere, cylinder)");
       }
       body->shapes.push_back(shape);
     }
@@ -282,15 +286,15 @@ Scene loadSceneFromUrdfString(const std::string& urdf_xml, const SceneParams& pa
     box.type = ShapeType::kBox;
     box.size = Eigen::Vector3d(2.0 * params.ground_plane.half_extent, 2.0 * params.ground_plane.half_extent,
                                params.ground_plane.thickness);
-    box.origin.translation() = Eigen::Vector3d(0.0, 0.0, params.ground_plane.height - 0.5 * params.ground_plane.thickness);
+    box.origin.translation() =
+        Eigen::Vector3d(0.0, 0.0, params.ground_plane.height - 0.5 * params.ground_plane.thickness);
     g.shapes.push_back(box);
     scene.bodies.push_back(g);
   }
 
   // Names in the YAML must be bodies of the scene.
   auto require = [&](const std::string& name, const std::string& where) {
-    if (scene.bodyIndex(name) < 0)
-      throw SceneError(source + ": " + where + ": no body named '" + name + "'");
+    if (scene.bodyIndex(name) < 0) throw SceneError(source + ": " + where + ": no body named '" + name + "'");
   };
   for (const PairFriction& f : params.friction_pairs) {
     require(f.body_a, "friction_pairs");

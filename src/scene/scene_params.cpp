@@ -24,9 +24,18 @@ const char* complianceStorageName(ComplianceStorage storage) {
 }
 
 bool parseComplianceStorage(const std::string& name, ComplianceStorage* storage) {
-  if (name == "dense") { *storage = ComplianceStorage::kDense; return true; }
-  if (name == "block_sparse") { *storage = ComplianceStorage::kBlockSparse; return true; }
-  if (name == "bodies") { *storage = ComplianceStorage::kBodies; return true; }
+  if (name == "dense") {
+    *storage = ComplianceStorage::kDense;
+    return true;
+  }
+  if (name == "block_sparse") {
+    *storage = ComplianceStorage::kBlockSparse;
+    return true;
+  }
+  if (name == "bodies") {
+    *storage = ComplianceStorage::kBodies;
+    return true;
+  }
   return false;
 }
 
@@ -48,7 +57,9 @@ double SceneParams::frictionFor(const std::string& a, const std::string& b) cons
 }
 
 PairContactModel SceneParams::contactModelFor(const std::string& a, const std::string& b) const {
-  auto same = [&](const std::string& x, const std::string& y) { return (x == a && y == b) || (x == b && y == a); };
+  auto same = [&](const std::string& x, const std::string& y) {
+    return (x == a && y == b) || (x == b && y == a);
+  };
   PairContactModel m;
   m.mu = mu;
   m.torsional = torsional_friction;
@@ -84,16 +95,19 @@ std::string validateSceneParams(const SceneParams& p) {
     if (!finite(f.torsional) || !finite(f.rolling))
       return "friction_pairs: torsional and rolling of [" + f.body_a + ", " + f.body_b + "] must be finite";
   }
-  if (!finite(p.torsional_friction) || p.torsional_friction < 0.0) return "torsional_friction must be >= 0 (m)";
+  if (!finite(p.torsional_friction) || p.torsional_friction < 0.0)
+    return "torsional_friction must be >= 0 (m)";
   if (!finite(p.rolling_friction) || p.rolling_friction < 0.0) return "rolling_friction must be >= 0 (m)";
-  if (!finite(p.restitution) || p.restitution < 0.0 || p.restitution > 1.0) return "restitution must be in [0, 1]";
+  if (!finite(p.restitution) || p.restitution < 0.0 || p.restitution > 1.0)
+    return "restitution must be in [0, 1]";
   if (!finite(p.restitution_threshold) || p.restitution_threshold < 0.0)
     return "restitution_threshold must be >= 0 (m/s)";
   for (const PairRestitution& r : p.restitution_pairs)
     if (!finite(r.restitution) || r.restitution < 0.0 || r.restitution > 1.0)
       return "restitution_pairs: restitution of [" + r.body_a + ", " + r.body_b + "] must be in [0, 1]";
   if (!finite(p.contact_margin) || p.contact_margin < 0.0) return "contact_margin must be >= 0 (m)";
-  if (!finite(p.id_match_tolerance) || p.id_match_tolerance < 0.0) return "id_match_tolerance must be >= 0 (m)";
+  if (!finite(p.id_match_tolerance) || p.id_match_tolerance < 0.0)
+    return "id_match_tolerance must be >= 0 (m)";
   if (p.ground_plane.enabled) {
     if (!finite(p.ground_plane.height)) return "ground_plane.height must be finite";
     if (!finite(p.ground_plane.half_extent) || p.ground_plane.half_extent <= 0.0)
@@ -104,7 +118,8 @@ std::string validateSceneParams(const SceneParams& p) {
   for (const auto& [joint, o] : p.joint_origins)
     if (!o.xyz.allFinite() || !o.rpy.allFinite()) return "joint_origins." + joint + " must be finite";
   for (const auto& [link, v] : p.initial_velocities)
-    if (!v.linear.allFinite() || !v.angular.allFinite()) return "initial_velocities." + link + " must be finite";
+    if (!v.linear.allFinite() || !v.angular.allFinite())
+      return "initial_velocities." + link + " must be finite";
   if (!finite(p.duration) || p.duration < 0.0) return "duration must be >= 0 (s)";
   if (std::string err = core::validateParams(p.solver); !err.empty()) return "solver: " + err;
   return "";
@@ -174,7 +189,8 @@ class Reader {
   // Each entry of the map `n`: its name, its value (a map of `allowed` keys only) and its key
   // "key.name".
   template <typename F>
-  void forEachEntry(const YAML::Node& n, const std::string& key, const std::set<std::string>& allowed, F&& f) const {
+  void forEachEntry(const YAML::Node& n, const std::string& key, const std::set<std::string>& allowed,
+                    F&& f) const {
     map(n, key);
     for (const auto& entry : n) {
       const std::string name = entry.first.Scalar();
@@ -231,17 +247,19 @@ void readRestitutionPairs(const Reader& r, const YAML::Node& v, const std::strin
 }
 
 void readFrictionPairs(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
-  r.forEachItem(v, key, "[body_a, body_b, mu(, torsional, rolling)]", [&](const YAML::Node& item, const std::string& k) {
-    if (!item.IsSequence() || (item.size() != 3 && item.size() != 5))
-      r.fail(k, "expected [body_a, body_b, mu] or [body_a, body_b, mu, torsional, rolling]");
-    PairFriction f{r.string(item[0], k), r.string(item[1], k), r.number(item[2], k)};
-    if (item.size() == 5) {
-      f.torsional = r.number(item[3], k);
-      f.rolling = r.number(item[4], k);
-      if (f.torsional < 0.0 || f.rolling < 0.0) r.fail(k, "torsional and rolling must be >= 0 (m)");
-    }
-    p->friction_pairs.push_back(f);
-  });
+  r.forEachItem(v, key, "[body_a, body_b, mu(, torsional, rolling)]",
+                [&](const YAML::Node& item, const std::string& k) {
+                  if (!item.IsSequence() || (item.size() != 3 && item.size() != 5))
+                    r.fail(k, "expected [body_a, body_b, mu] or [body_a, body_b, mu, torsional, rolling]");
+                  PairFriction f{r.string(item[0], k), r.string(item[1], k), r.number(item[2], k)};
+                  if (item.size() == 5) {
+                    f.torsional = r.number(item[3], k);
+                    f.rolling = r.number(item[4], k);
+                    if (f.torsional < 0.0 || f.rolling < 0.0)
+                      r.fail(k, "torsional and rolling must be >= 0 (m)");
+                  }
+                  p->friction_pairs.push_back(f);
+                });
 }
 
 void readDisableCollisions(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
@@ -262,26 +280,34 @@ void readGroundPlane(const Reader& r, const YAML::Node& v, const std::string& ke
 }
 
 void readJointOrigins(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
-  r.forEachEntry(v, key, {"xyz", "rpy", "rpy_deg"}, [&](const std::string& name, const YAML::Node& j, const std::string& k) {
-    JointOriginOverride o;
-    if (j["xyz"]) { o.has_xyz = true; o.xyz = r.vec3(j["xyz"], k + ".xyz"); }
-    if (j["rpy"] && j["rpy_deg"]) r.fail(k, "give rpy or rpy_deg, not both");
-    if (j["rpy"]) { o.has_rpy = true; o.rpy = r.vec3(j["rpy"], k + ".rpy"); }
-    if (j["rpy_deg"]) {
-      o.has_rpy = true;
-      o.rpy = r.vec3(j["rpy_deg"], k + ".rpy_deg") * (M_PI / 180.0);
-    }
-    p->joint_origins[name] = o;
-  });
+  r.forEachEntry(v, key, {"xyz", "rpy", "rpy_deg"},
+                 [&](const std::string& name, const YAML::Node& j, const std::string& k) {
+                   JointOriginOverride o;
+                   if (j["xyz"]) {
+                     o.has_xyz = true;
+                     o.xyz = r.vec3(j["xyz"], k + ".xyz");
+                   }
+                   if (j["rpy"] && j["rpy_deg"]) r.fail(k, "give rpy or rpy_deg, not both");
+                   if (j["rpy"]) {
+                     o.has_rpy = true;
+                     o.rpy = r.vec3(j["rpy"], k + ".rpy");
+                   }
+                   if (j["rpy_deg"]) {
+                     o.has_rpy = true;
+                     o.rpy = r.vec3(j["rpy_deg"], k + ".rpy_deg") * (M_PI / 180.0);
+                   }
+                   p->joint_origins[name] = o;
+                 });
 }
 
 void readInitialVelocities(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
-  r.forEachEntry(v, key, {"linear", "angular"}, [&](const std::string& name, const YAML::Node& b, const std::string& k) {
-    InitialVelocity iv;
-    if (b["linear"]) iv.linear = r.vec3(b["linear"], k + ".linear");
-    if (b["angular"]) iv.angular = r.vec3(b["angular"], k + ".angular");
-    p->initial_velocities[name] = iv;
-  });
+  r.forEachEntry(v, key, {"linear", "angular"},
+                 [&](const std::string& name, const YAML::Node& b, const std::string& k) {
+                   InitialVelocity iv;
+                   if (b["linear"]) iv.linear = r.vec3(b["linear"], k + ".linear");
+                   if (b["angular"]) iv.angular = r.vec3(b["angular"], k + ".angular");
+                   p->initial_velocities[name] = iv;
+                 });
 }
 
 void readSolver(const Reader& r, const YAML::Node& v, const std::string& key, SceneParams* p) {
@@ -295,7 +321,8 @@ void readSolver(const Reader& r, const YAML::Node& v, const std::string& key, Sc
         if (spec.name != "solver") list += ", " + spec.name;
       r.fail(key + "." + k, "unknown key (known: " + list + ")");
     }
-    if (!kv2.second.IsScalar()) r.fail(key + "." + k, "expected " + core::expectedValue(*core::findSolverParam(param)));
+    if (!kv2.second.IsScalar())
+      r.fail(key + "." + k, "expected " + core::expectedValue(*core::findSolverParam(param)));
     if (const std::string error = core::setParam(&p->solver, param, kv2.second.Scalar()); !error.empty())
       r.fail(key + "." + k, error);
   }
@@ -323,8 +350,10 @@ SceneParams parseNode(const YAML::Node& root, const std::string& source) {
   r.onlyKeys(root, "", known);
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
-    if (const auto field = fields.find(key); field != fields.end()) r.read(kv.second, key, field->second);
-    else kSections.at(key)(r, kv.second, key, &p);
+    if (const auto field = fields.find(key); field != fields.end())
+      r.read(kv.second, key, field->second);
+    else
+      kSections.at(key)(r, kv.second, key, &p);
   }
   if (std::string err = validateSceneParams(p); !err.empty()) throw SceneError(source + ": " + err);
   return p;

@@ -23,8 +23,7 @@ Eigen::Quaterniond integrateOrientation(const Eigen::Quaterniond& q, const Eigen
 
 }  // namespace
 
-SceneSimulator::SceneSimulator(Scene scene)
-    : scene_(std::move(scene)), solver_(scene_.params.solver) {
+SceneSimulator::SceneSimulator(Scene scene) : scene_(std::move(scene)), solver_(scene_.params.solver) {
   if (std::string err = validateSceneParams(scene_.params); !err.empty())
     throw SceneError("scene '" + scene_.name + "': " + err);
   generator_ = std::make_unique<ContactGenerator>(scene_);
@@ -42,7 +41,8 @@ const RigidBody& SceneSimulator::body(const std::string& name) const {
   return scene_.bodies[scene_.requireBody(name)];
 }
 
-void SceneSimulator::setBodyPose(int index, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation) {
+void SceneSimulator::setBodyPose(int index, const Eigen::Vector3d& position,
+                                 const Eigen::Quaterniond& orientation) {
   const RigidBody& b = body(index);
   if (b.is_static) throw SceneError("body '" + b.name + "' is static: its pose cannot change");
   if (pending_) throw SceneError("setBodyPose during a pending step");
@@ -50,7 +50,8 @@ void SceneSimulator::setBodyPose(int index, const Eigen::Vector3d& position, con
   scene_.bodies[index].orientation = orientation.normalized();
 }
 
-void SceneSimulator::setBodyVelocity(int index, const Eigen::Vector3d& linear, const Eigen::Vector3d& angular) {
+void SceneSimulator::setBodyVelocity(int index, const Eigen::Vector3d& linear,
+                                     const Eigen::Vector3d& angular) {
   const RigidBody& b = body(index);
   if (b.is_static) throw SceneError("body '" + b.name + "' is static: it cannot move");
   if (pending_) throw SceneError("setBodyVelocity during a pending step");
@@ -58,7 +59,8 @@ void SceneSimulator::setBodyVelocity(int index, const Eigen::Vector3d& linear, c
   scene_.bodies[index].angular_velocity = angular;
 }
 
-void SceneSimulator::addExternalWrench(int index, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+void SceneSimulator::addExternalWrench(int index, const Eigen::Vector3d& force,
+                                       const Eigen::Vector3d& torque) {
   const RigidBody& b = body(index);
   if (b.is_static) return;  // static bodies do not move
   if (pending_) throw SceneError("addExternalWrench during a pending step (add it before buildStep)");

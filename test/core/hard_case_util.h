@@ -52,8 +52,8 @@ inline Body box(double mass, const Eigen::Vector3d& size, const Eigen::Vector3d&
 }
 
 struct ContactSpec {
-  int a = 0;        // body the normal points into (λ_n n acts on it)
-  int b = -1;       // the other body, -1 for the static world
+  int a = 0;   // body the normal points into (λ_n n acts on it)
+  int b = -1;  // the other body, -1 for the static world
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double mu = 0.5;  // 0 with kFrictionless; Contact::kMuDefault allowed
@@ -191,7 +191,8 @@ class World {
 
 // k contact points on the bottom face (z = com.z - h/2) of a box: a √k × √k grid for
 // k = 4, 16; k = 8 is the 3 × 3 grid without its centre.
-inline std::vector<Eigen::Vector3d> bottomPoints(const Eigen::Vector3d& com, const Eigen::Vector3d& size, int k) {
+inline std::vector<Eigen::Vector3d> bottomPoints(const Eigen::Vector3d& com, const Eigen::Vector3d& size,
+                                                 int k) {
   std::vector<Eigen::Vector3d> points;
   const double z = com.z() - 0.5 * size.z();
   auto grid = [&](int n, bool skip_centre) {
@@ -203,10 +204,14 @@ inline std::vector<Eigen::Vector3d> bottomPoints(const Eigen::Vector3d& com, con
         points.emplace_back(x, y, z);
       }
   };
-  if (k == 4) grid(2, false);
-  else if (k == 8) grid(3, true);
-  else if (k == 16) grid(4, false);
-  else ADD_FAILURE() << "bottomPoints: k = " << k;
+  if (k == 4)
+    grid(2, false);
+  else if (k == 8)
+    grid(3, true);
+  else if (k == 16)
+    grid(4, false);
+  else
+    ADD_FAILURE() << "bottomPoints: k = " << k;
   return points;
 }
 
@@ -242,12 +247,14 @@ inline SolverParams paramsFor(SolverKind kind, double tolerance = 1e-6, int max_
 
 inline bool bitIdentical(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return a.size() == b.size() &&
-         (a.size() == 0 || std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0);
+         (a.size() == 0 ||
+          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0);
 }
 
 inline bool isFailureStatus(SolveStatus s) {
-  return s == SolveStatus::kMaxIterations || s == SolveStatus::kZeroDiagonal || s == SolveStatus::kNotApplicable ||
-         s == SolveStatus::kRayTermination || s == SolveStatus::kNumericalFailure || s == SolveStatus::kTimeBudget;
+  return s == SolveStatus::kMaxIterations || s == SolveStatus::kZeroDiagonal ||
+         s == SolveStatus::kNotApplicable || s == SolveStatus::kRayTermination ||
+         s == SolveStatus::kNumericalFailure || s == SolveStatus::kTimeBudget;
 }
 
 // Energy the contact forces add over one step, in the units of λ·d (J at position level):
@@ -276,7 +283,8 @@ inline std::string expectHonest(const Problem& p, const SolverParams& params, co
   EXPECT_EQ(r.forces.size(), n) << label;
   EXPECT_EQ(r.d.size(), n) << label;
   EXPECT_EQ(r.states.size(), p.contacts.size()) << label;
-  if (r.forces.size() != n || r.d.size() != n || r.states.size() != p.contacts.size()) return label + ": bad sizes";
+  if (r.forces.size() != n || r.d.size() != n || r.states.size() != p.contacts.size())
+    return label + ": bad sizes";
   EXPECT_TRUE(r.forces.allFinite()) << label;
   EXPECT_TRUE(r.d.allFinite()) << label;
   EXPECT_TRUE(std::isfinite(r.residual)) << label;
@@ -295,7 +303,8 @@ inline std::string expectHonest(const Problem& p, const SolverParams& params, co
   Eigen::VectorXd d;
   multiply(p.W, r.forces, d);
   d += p.d_free + params.regularizationTerm * r.forces;
-  const double scale = toDense(p.W).cwiseAbs().maxCoeff() * r.forces.cwiseAbs().sum() + p.d_free.cwiseAbs().maxCoeff();
+  const double scale =
+      toDense(p.W).cwiseAbs().maxCoeff() * r.forces.cwiseAbs().sum() + p.d_free.cwiseAbs().maxCoeff();
   EXPECT_LE((d - r.d).cwiseAbs().maxCoeff(), 1e-12 * scale) << label;
   std::vector<bool> ignored(p.contacts.size());
   for (std::size_t i = 0; i < p.contacts.size(); ++i) ignored[i] = r.states[i] == ContactState::kIgnored;
@@ -323,8 +332,8 @@ inline std::string expectHonest(const Problem& p, const SolverParams& params, co
     }
   }
   char line[256];
-  std::snprintf(line, sizeof(line), "%-28s %-7s %-18s it %6d  residual %9.3g", label.c_str(), r.solver.c_str(),
-                statusName(r.status), r.iterations, r.residual);
+  std::snprintf(line, sizeof(line), "%-28s %-7s %-18s it %6d  residual %9.3g", label.c_str(),
+                r.solver.c_str(), statusName(r.status), r.iterations, r.residual);
   return line;
 }
 

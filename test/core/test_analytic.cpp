@@ -78,9 +78,7 @@ TEST(Analytic, SlidingWithCoupledAnisotropicBlockStillOpposesSlip) {
   // A full symmetric positive definite block: friction must still oppose the *resulting*
   // slip velocity (Coulomb's maximum dissipation), not just the free one.
   Eigen::Matrix3d W;
-  W << 2.0, 0.3, -0.2,
-       0.3, 1.5, 0.4,
-      -0.2, 0.4, 0.8;
+  W << 2.0, 0.3, -0.2, 0.3, 1.5, 0.4, -0.2, 0.4, 0.8;
   const Problem p = oneFrictionalContact(W, Eigen::Vector3d(-1.0, 2.0, -1.5), 0.3);
   const SolveResult r = solveProblem(p, tight(SolverKind::kNlgs));
   ASSERT_EQ(r.status, SolveStatus::kConverged) << r.message;
@@ -166,14 +164,11 @@ TEST(Analytic, PerContactMuOverridesDefault) {
 
 TEST(Analytic, SparseAndDenseStoragesGiveTheSameForces) {
   Eigen::MatrixXd W(6, 6);
-  W << 2.0, 0.1, 0.0, 0.5, 0.0, 0.1,
-       0.1, 1.0, 0.0, 0.0, 0.2, 0.0,
-       0.0, 0.0, 1.0, 0.1, 0.0, 0.0,
-       0.5, 0.0, 0.1, 2.0, 0.0, 0.0,
-       0.0, 0.2, 0.0, 0.0, 1.0, 0.1,
-       0.1, 0.0, 0.0, 0.0, 0.1, 1.0;
+  W << 2.0, 0.1, 0.0, 0.5, 0.0, 0.1, 0.1, 1.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 0.5, 0.0,
+      0.1, 2.0, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 1.0, 0.1, 0.1, 0.0, 0.0, 0.0, 0.1, 1.0;
   Problem dense;
-  dense.contacts = {Contact{1, ContactType::kFrictional, 3, 0.4}, Contact{2, ContactType::kFrictional, 3, 0.4}};
+  dense.contacts = {Contact{1, ContactType::kFrictional, 3, 0.4},
+                    Contact{2, ContactType::kFrictional, 3, 0.4}};
   dense.W = W;
   dense.d_free.resize(6);
   dense.d_free << -1.0, 0.3, -0.1, -0.5, 0.9, 0.2;
@@ -218,7 +213,8 @@ TEST(Analytic, ZeroFrictionConeIsTheNormalRay) {
   EXPECT_EQ(sliding[2], 0.0);
   // A separating μ = 0 contact with no force is an exact solution (residual 0), in the
   // residual every result reports (a fuzzer found it reported as 1).
-  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity() * 2.0, Eigen::Vector3d(2.0, 0.0, 0.0), 0.0);
+  const Problem p =
+      oneFrictionalContact(Eigen::Matrix3d::Identity() * 2.0, Eigen::Vector3d(2.0, 0.0, 0.0), 0.0);
   for (SolverKind kind : {SolverKind::kPgs, SolverKind::kNlgs, SolverKind::kAuto}) {
     const SolveResult r = solveProblem(p, tight(kind));
     ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind);

@@ -111,7 +111,8 @@ TEST(ContactTypes, ValidationNamesTheFault) {
 TEST(ContactTypes, ZeroFrictionContactsAreSolvedAsOneRow) {
   // Four contacts: 0 and 2 frictional with μ = 0, 1 with μ = 0.5, 3 with the default μ = 0.
   Problem three;
-  for (int i = 0; i < 4; ++i) three.contacts.push_back(Contact{10 + i, ContactType::kFrictional, 3, i == 1 ? 0.5 : 0.0});
+  for (int i = 0; i < 4; ++i)
+    three.contacts.push_back(Contact{10 + i, ContactType::kFrictional, 3, i == 1 ? 0.5 : 0.0});
   three.contacts[3].mu = Contact::kMuDefault;
   Eigen::MatrixXd A = Eigen::MatrixXd::Random(12, 12);
   const Eigen::MatrixXd W = A * A.transpose() + 0.2 * Eigen::MatrixXd::Identity(12, 12);

@@ -30,7 +30,8 @@ World boxOnPlane(int k, double mu, double mass = 1.0, double side = 0.2) {
   const Eigen::Vector3d size(side, side, side);
   const Eigen::Vector3d com(0.0, 0.0, 0.5 * side);
   world.add(box(mass, size, com));
-  for (const Eigen::Vector3d& p : bottomPoints(com, size, k)) world.contact(0, -1, p, Eigen::Vector3d::UnitZ(), mu);
+  for (const Eigen::Vector3d& p : bottomPoints(com, size, k))
+    world.contact(0, -1, p, Eigen::Vector3d::UnitZ(), mu);
   return world;
 }
 
@@ -142,7 +143,6 @@ TEST(HardCases, ContactRepeatedWithOppositeNormals) {
   }
 }
 
-
 // ---- mass ratios and scales -----------------------------------------------------------------
 
 // Two boxes stacked on the ground, 4 contacts per interface (24 rows, rank-deficient),
@@ -154,8 +154,10 @@ World twoBoxStack(double m_bottom, double m_top, double mu) {
   const Eigen::Vector3d c0(0, 0, 0.1), c1(0, 0, 0.3);
   const int b0 = world.add(box(m_bottom, size, c0));
   const int b1 = world.add(box(m_top, size, c1));
-  for (const Eigen::Vector3d& p : bottomPoints(c0, size, 4)) world.contact(b0, -1, p, Eigen::Vector3d::UnitZ(), mu);
-  for (const Eigen::Vector3d& p : bottomPoints(c1, size, 4)) world.contact(b1, b0, p, Eigen::Vector3d::UnitZ(), mu);
+  for (const Eigen::Vector3d& p : bottomPoints(c0, size, 4))
+    world.contact(b0, -1, p, Eigen::Vector3d::UnitZ(), mu);
+  for (const Eigen::Vector3d& p : bottomPoints(c1, size, 4))
+    world.contact(b1, b0, p, Eigen::Vector3d::UnitZ(), mu);
   return world;
 }
 
@@ -179,7 +181,8 @@ TEST(HardCases, MassRatios) {
         const double w_ground = (m_top + m_bottom) * kG, w_top = m_top * kG;
         for (SolverKind kind : allSolvers()) {
           char label[96];
-          std::snprintf(label, sizeof(label), "%s 1:%.0e mu=%.1f", heavy_on_top ? "heavy/light" : "light/heavy", ratio, mu);
+          std::snprintf(label, sizeof(label), "%s 1:%.0e mu=%.1f",
+                        heavy_on_top ? "heavy/light" : "light/heavy", ratio, mu);
           const SolveResult r = solveTwiceChecked(p, paramsFor(kind, 1e-8, 20000), label);
           if (!applies(kind, p)) {
             EXPECT_EQ(r.status, SolveStatus::kNotApplicable) << label;
@@ -198,7 +201,8 @@ TEST(HardCases, MassRatios) {
           }
           const bool must_converge =
               kind == SolverKind::kNewton || (!heavy_on_top && kind != SolverKind::kApgd) ||
-              (ratio == 1e3 && (kind == SolverKind::kPgs || kind == SolverKind::kLemke || kind == SolverKind::kApgd));
+              (ratio == 1e3 &&
+               (kind == SolverKind::kPgs || kind == SolverKind::kLemke || kind == SolverKind::kApgd));
           if (must_converge) {
             EXPECT_TRUE(r.converged) << label << " " << r.solver << ": " << r.message;
           }
@@ -245,7 +249,8 @@ TEST(HardCases, TinyAndHugeScales) {
           const double stopping = mass * world.bodies[0].v.x() / world.dt;
           EXPECT_NEAR(f.x(), -std::min(mu * f.z(), stopping), 1e-4 * weight) << label << " " << r.solver;
           EXPECT_NEAR(f.y(), 0.0, 1e-5 * weight) << label << " " << r.solver;
-          EXPECT_LE(energyGain(p, 0.0, r.forces), 1e-6 * weight * world.dt * world.dt * kG) << label << " " << r.solver;
+          EXPECT_LE(energyGain(p, 0.0, r.forces), 1e-6 * weight * world.dt * world.dt * kG)
+              << label << " " << r.solver;
         }
       }
     }
@@ -294,7 +299,8 @@ TEST(HardCases, FrictionCoefficients) {
         EXPECT_NEAR(f.x(), -1e-9 * f.z(), 1e-6 * 1e-9 * f.z()) << label << " " << r.solver;
       }
       if (r.converged) {
-        EXPECT_LE(energyGain(p, 0.0, r.forces), 1e-9 * m * kG * world.dt * world.dt) << label << " " << r.solver;
+        EXPECT_LE(energyGain(p, 0.0, r.forces), 1e-9 * m * kG * world.dt * world.dt)
+            << label << " " << r.solver;
       }
     }
   }
@@ -390,7 +396,7 @@ TEST(HardCases, NonPsdAndNonSymmetricW) {
     Eigen::MatrixXd M;
     Eigen::VectorXd q;
     std::map<SolverKind, SolveStatus> expected;  // empty: every solver converges
-    Eigen::VectorXd solution;                     // unique solution, if any
+    Eigen::VectorXd solution;                    // unique solution, if any
   };
   std::vector<Case> cases;
   using S = SolveStatus;
@@ -403,17 +409,27 @@ TEST(HardCases, NonPsdAndNonSymmetricW) {
   {
     Eigen::MatrixXd M(2, 2);
     M << 1, 0, 0, -1;
-    cases.push_back({"negative diagonal", M, Eigen::Vector2d(-1, -1),
-                     {{K::kPgs, S::kZeroDiagonal}, {K::kNlgs, S::kZeroDiagonal}, {K::kLemke, S::kRayTermination},
-                      {K::kApgd, S::kNumericalFailure}, {K::kNewton, S::kNumericalFailure}},
+    cases.push_back({"negative diagonal",
+                     M,
+                     Eigen::Vector2d(-1, -1),
+                     {{K::kPgs, S::kZeroDiagonal},
+                      {K::kNlgs, S::kZeroDiagonal},
+                      {K::kLemke, S::kRayTermination},
+                      {K::kApgd, S::kNumericalFailure},
+                      {K::kNewton, S::kNumericalFailure}},
                      Eigen::VectorXd()});
   }
   {
     Eigen::MatrixXd M(3, 3);
     M << 1, 2, 0, 0, 1, 2, 2, 0, 1;
-    cases.push_back({"non-symmetric P", M, Eigen::Vector3d(-1, -1, -1),
-                     {{K::kPgs, S::kMaxIterations}, {K::kNlgs, S::kMaxIterations}, {K::kLemke, S::kConverged},
-                      {K::kApgd, S::kConverged}, {K::kNewton, S::kConverged}},
+    cases.push_back({"non-symmetric P",
+                     M,
+                     Eigen::Vector3d(-1, -1, -1),
+                     {{K::kPgs, S::kMaxIterations},
+                      {K::kNlgs, S::kMaxIterations},
+                      {K::kLemke, S::kConverged},
+                      {K::kApgd, S::kConverged},
+                      {K::kNewton, S::kConverged}},
                      Eigen::Vector3d::Constant(1.0 / 3.0)});
   }
   {
@@ -424,9 +440,14 @@ TEST(HardCases, NonPsdAndNonSymmetricW) {
   {
     Eigen::MatrixXd M(2, 2);
     M << -1, 0, 0, -1;
-    cases.push_back({"negative definite", M, Eigen::Vector2d(1, -1),
-                     {{K::kPgs, S::kZeroDiagonal}, {K::kNlgs, S::kZeroDiagonal}, {K::kLemke, S::kRayTermination},
-                      {K::kApgd, S::kNumericalFailure}, {K::kNewton, S::kNumericalFailure}},
+    cases.push_back({"negative definite",
+                     M,
+                     Eigen::Vector2d(1, -1),
+                     {{K::kPgs, S::kZeroDiagonal},
+                      {K::kNlgs, S::kZeroDiagonal},
+                      {K::kLemke, S::kRayTermination},
+                      {K::kApgd, S::kNumericalFailure},
+                      {K::kNewton, S::kNumericalFailure}},
                      Eigen::VectorXd()});
   }
   for (const Case& c : cases) {
@@ -446,7 +467,6 @@ TEST(HardCases, NonPsdAndNonSymmetricW) {
     }
   }
 }
-
 
 // ---- regularizationTerm on rank-deficient W -------------------------------------------------
 
@@ -475,17 +495,19 @@ TEST(HardCases, RegularizationMakesForcesUnique) {
         if (!applies(kind, p)) continue;
         SolverParams params = paramsFor(kind, 1e-10, 20000);
         params.regularizationTerm = r;
-        const std::string label = "dup mu=" + std::to_string(mu).substr(0, 3) + " r=" + (r > 0 ? "1e-6" : "0");
+        const std::string label =
+            "dup mu=" + std::to_string(mu).substr(0, 3) + " r=" + (r > 0 ? "1e-6" : "0");
         const SolveResult res = solveTwiceChecked(p, params, label);
         ASSERT_TRUE(res.converged) << label << " " << res.solver << ": " << res.message;
         answers.push_back(res.forces);
       }
       double spread = 0.0;
-      for (const Eigen::VectorXd& a : answers) spread = std::max(spread, (a - answers.front()).cwiseAbs().maxCoeff());
+      for (const Eigen::VectorXd& a : answers)
+        spread = std::max(spread, (a - answers.front()).cwiseAbs().maxCoeff());
       (r == 0.0 ? spread_plain : spread_regularized) = spread;
     }
-    std::printf("  mu=%.1f: max |Δλ| between solvers: %.3g N without r, %.3g N with r = 1e-6\n", mu, spread_plain,
-                spread_regularized);
+    std::printf("  mu=%.1f: max |Δλ| between solvers: %.3g N without r, %.3g N with r = 1e-6\n", mu,
+                spread_plain, spread_regularized);
     EXPECT_GT(spread_plain, 0.1) << "the unregularized forces were expected to be non-unique";
     EXPECT_LT(spread_regularized, 1e-5);
   }
@@ -524,7 +546,8 @@ TEST(HardCases, RegularizationMakesForcesSmoothInTime) {
       previous_lambda = res.forces;
       previous_q = p.d_free;
     }
-    std::printf("  %s: max |Δλ| / (|Δd_free| / λ_min(W + rI)) over 200 steps = %.3g\n", solverName(kind), worst_ratio);
+    std::printf("  %s: max |Δλ| / (|Δd_free| / λ_min(W + rI)) over 200 steps = %.3g\n", solverName(kind),
+                worst_ratio);
   }
 }
 
@@ -567,7 +590,8 @@ TEST(HardCases, MurtyThroughEverySolver) {
         ASSERT_TRUE(r.converged) << label << " " << r.solver << ": " << r.message;
       }
       if (r.converged) {
-        EXPECT_LE((r.forces - solution).cwiseAbs().maxCoeff(), 1e-6 * solution.norm()) << label << " " << r.solver;
+        EXPECT_LE((r.forces - solution).cwiseAbs().maxCoeff(), 1e-6 * solution.norm())
+            << label << " " << r.solver;
       }
     }
   }
@@ -616,7 +640,8 @@ TEST(HardCases, SharedFc3dThroughEverySolver) {
     if (p.rowCount() > 400) continue;
     ++tried;
     for (SolverKind kind : allSolvers()) {
-      const SolveResult r = solveTwiceChecked(p, paramsFor(kind, 1e-6, 2000), file.filename().string(), false);
+      const SolveResult r =
+          solveTwiceChecked(p, paramsFor(kind, 1e-6, 2000), file.filename().string(), false);
       if (!applies(kind, p)) {
         EXPECT_EQ(r.status, SolveStatus::kNotApplicable) << file.filename();
       }
@@ -685,11 +710,11 @@ TEST(HardCases, MaxFDropsAndResolves) {
       fresh.maxF = 0.0;
       const SolveResult again = solveProblem(rest, fresh);
       ASSERT_TRUE(again.converged) << again.message;
-      EXPECT_LE((again.forces - expected_rows).cwiseAbs().maxCoeff(), 1e-6 * max_force) << label << " " << r.solver;
+      EXPECT_LE((again.forces - expected_rows).cwiseAbs().maxCoeff(), 1e-6 * max_force)
+          << label << " " << r.solver;
     }
   }
 }
-
 
 // ---- regressions of faults the hard cases found ---------------------------------------------
 
@@ -723,7 +748,8 @@ TEST(HardCases, LemkeRefusesProblemsTooLargeForItsTableau) {
     Problem p;
     std::vector<int> sizes;
     for (int i = 0; i < contacts; ++i) {
-      p.contacts.push_back(pyramid ? Contact{i, ContactType::kFrictional, 3, 0.5} : Contact{i, ContactType::kFrictionless, 1, 0.0});
+      p.contacts.push_back(pyramid ? Contact{i, ContactType::kFrictional, 3, 0.5}
+                                   : Contact{i, ContactType::kFrictionless, 1, 0.0});
       sizes.push_back(p.contacts.back().rows);
     }
     BlockSparseMatrix W = BlockSparseMatrix::withBlockSizes(sizes);
@@ -739,7 +765,8 @@ TEST(HardCases, LemkeRefusesProblemsTooLargeForItsTableau) {
     const SolveResult split = solveProblem(p, params);
     EXPECT_EQ(split.status, SolveStatus::kConverged) << split.message;
     params.islands = false;  // one tableau for the whole problem
-    const SolveResult r = solveTwiceChecked(p, params, pyramid ? "lemke pyramid4 6000 vars" : "lemke 5000 rows");
+    const SolveResult r =
+        solveTwiceChecked(p, params, pyramid ? "lemke pyramid4 6000 vars" : "lemke 5000 rows");
     EXPECT_EQ(r.status, SolveStatus::kNotApplicable) << r.message;
     EXPECT_NE(r.message.find("limited to 4096"), std::string::npos) << r.message;
     EXPECT_LT(r.solve_time, 1.0);

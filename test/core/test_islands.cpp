@@ -4,14 +4,14 @@
 // of Gauss-Seidel sweeps, to 1e-10 for unique solutions at tight tolerance), and the same
 // forces bit for bit whatever the thread count; the symmetric Newton path returns forces
 // whose residual, recomputed here from W, d_free and the forces, meets the tolerance.
+#include "hard_case_util.h"
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/residual.h"
-#include "hard_case_util.h"
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <memory>
@@ -62,7 +62,8 @@ Generated generate(int groups, int per_group, Kinds kinds, unsigned seed, double
   g.problem.W = W;
   g.problem.d_free.resize(n);
   for (int i = 0; i < nc; ++i)
-    for (int r = off[i]; r < off[i + 1]; ++r) g.problem.d_free[r] = r == off[i] ? -0.5 + 0.8 * pos(rng) : 0.3 * u(rng);
+    for (int r = off[i]; r < off[i + 1]; ++r)
+      g.problem.d_free[r] = r == off[i] ? -0.5 + 0.8 * pos(rng) : 0.3 * u(rng);
   return g;
 }
 
@@ -140,7 +141,8 @@ TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
       const SolveResult split = solveProblem(p, paramsFor(kind, 1e-300, 37, true));
       EXPECT_EQ(whole.iterations, 37);
       EXPECT_EQ(split.iterations, 37);
-      EXPECT_LE(maxDiff(whole.forces, split.forces), 1e-12) << solverName(kind) << (sparse ? " sparse" : " dense");
+      EXPECT_LE(maxDiff(whole.forces, split.forces), 1e-12)
+          << solverName(kind) << (sparse ? " sparse" : " dense");
       EXPECT_LE(maxDiff(whole.d, split.d), 1e-12);
       EXPECT_NEAR(whole.residual, split.residual, 1e-12 * std::max(1.0, whole.residual));
     }
@@ -159,7 +161,8 @@ TEST(Islands, UniqueSolutionsEqualTheWholeProblem) {
       const SolveResult split = solveProblem(p, paramsFor(kind, 1e-12, 200000, true));
       EXPECT_TRUE(split.converged) << solverName(kind) << ": " << split.message;
       EXPECT_LE(split.residual, 1e-12) << solverName(kind);
-      EXPECT_LE(maxDiff(split.forces, reference.forces), 1e-10) << solverName(kind) << (sparse ? " sparse" : " dense");
+      EXPECT_LE(maxDiff(split.forces, reference.forces), 1e-10)
+          << solverName(kind) << (sparse ? " sparse" : " dense");
     }
   }
 }
@@ -286,7 +289,9 @@ TEST(Islands, TheBodyFormSplitsByBodyAndEqualsTheWholeUnbuiltSolve) {
   for (const auto& island : by_body.contacts) {  // an island's body form is its rows of W
     const Problem sub = islandProblem(p, off, island);
     ASSERT_EQ(validateProblem(sub), "");
-    EXPECT_LE((sub.bodies->toDense() - toDense(islandProblem(assembled, off, island).W)).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LE(
+        (sub.bodies->toDense() - toDense(islandProblem(assembled, off, island).W)).cwiseAbs().maxCoeff(),
+        1e-15);
   }
   for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
     SolverParams whole = paramsFor(kind, 1e-300, 25, false), split = paramsFor(kind, 1e-300, 25, true);

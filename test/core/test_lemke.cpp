@@ -306,10 +306,7 @@ TEST(Lemke, DegenerateLcpsTerminateAndSolve) {
   // Duplicated contacts: two identical rows, W singular (two contacts on the same point).
   {
     Eigen::MatrixXd M(4, 4);
-    M << 2, 2, 1, 0,
-         2, 2, 1, 0,
-         1, 1, 3, 1,
-         0, 0, 1, 2;
+    M << 2, 2, 1, 0, 2, 2, 1, 0, 1, 1, 3, 1, 0, 0, 1, 2;
     Eigen::VectorXd q(4);
     q << -2, -2, -1, -1;
     LemkeRun run(makeLcpProblem(M, q));

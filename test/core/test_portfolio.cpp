@@ -60,7 +60,9 @@ void expectPath(const SolveResult& r) {
     path += (i ? "->" : "") + r.stages[i].first;
     EXPECT_GE(r.stages[i].second, 0.0);
     total += r.stages[i].second;
-    if (i > 0) EXPECT_NE(r.stages[i].first, r.stages[i - 1].first) << "consecutive slices are one stage";
+    if (i > 0) {
+      EXPECT_NE(r.stages[i].first, r.stages[i - 1].first) << "consecutive slices are one stage";
+    }
   }
   EXPECT_EQ(r.solver, path);
   EXPECT_LE(total, r.solve_time + 1e-6);

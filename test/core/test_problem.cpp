@@ -61,10 +61,7 @@ TEST(Problem, InvalidProblemGivesInvalidInputStatusAndNoNumbers) {
 
 TEST(Problem, BlockSparseRoundTripsThroughDense) {
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(4, 4);
-  W << 2, 0, 0, 1,
-       0, 1, 0, 0,
-       0, 0, 1, 0,
-       1, 0, 0, 3;
+  W << 2, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 3;
   BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes({3, 1});
   B.beginRow();
   B.addBlock(0, W.block(0, 0, 3, 3));

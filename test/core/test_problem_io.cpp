@@ -142,13 +142,12 @@ TEST(SharedProblems, KnownSizes) {
     const char* file;
     int contacts;
   };
-  for (const Expected& e : {Expected{"fc3d/Rover1039.dat", 4}, Expected{"fc3d/Rover1040.dat", 5},
-                            Expected{"fc3d/Rover11035.dat", 1}, Expected{"fc3d/Rover4396.dat", 2},
-                            Expected{"fc3d/NESpheres_10_1.dat", 9},
-                            Expected{"fc3d/BoxesStack1-i100000-32.hdf5.dat", 52},
-                            Expected{"fc3d/OneObject-i1028-138.hdf5.dat", 23},
-                            Expected{"fc3d/Capsules-i100-1090.dat", 276},
-                            Expected{"fc3d/LMGC_100_PR_PerioBox-i00361-60-03000.hdf5", 60}}) {
+  for (const Expected& e :
+       {Expected{"fc3d/Rover1039.dat", 4}, Expected{"fc3d/Rover1040.dat", 5},
+        Expected{"fc3d/Rover11035.dat", 1}, Expected{"fc3d/Rover4396.dat", 2},
+        Expected{"fc3d/NESpheres_10_1.dat", 9}, Expected{"fc3d/BoxesStack1-i100000-32.hdf5.dat", 52},
+        Expected{"fc3d/OneObject-i1028-138.hdf5.dat", 23}, Expected{"fc3d/Capsules-i100-1090.dat", 276},
+        Expected{"fc3d/LMGC_100_PR_PerioBox-i00361-60-03000.hdf5", 60}}) {
     SCOPED_TRACE(e.file);
     const Problem problem = readProblemFile((kProblemsDir / e.file).string());
     EXPECT_EQ(static_cast<int>(problem.contacts.size()), e.contacts);
@@ -304,9 +303,11 @@ TEST_F(ProblemIoFiles, SparseBlockStructureErrors) {
   expectFault(write("label.dat", sparseOneContact("4")), "labelled 4");
   expectFault(write("row_ptr.dat", sparseOneContact("0", "1 1")), "block row pointers");
   expectFault(write("col_idx.dat", sparseOneContact("0", "0 1", "1")), "out of range");
-  expectFault(write("filled1.dat", "3 1 1 3 3 1 1 1 3 3 5 1 0 1 0 0 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"), "filled1");
+  expectFault(write("filled1.dat", "3 1 1 3 3 1 1 1 3 3 5 1 0 1 0 0 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"),
+              "filled1");
   expectFault(write("ends.dat", "3 1 1 3 3 1 1 1 2 3 2 1 0 1 0 0 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"), "end at 2");
-  expectFault(write("twice.dat", "3 1 1 3 3 2 1 1 3 3 2 2 0 2 0 0 0 1 0 0 0 1 0 0 0 1 1 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"),
+  expectFault(write("twice.dat",
+                    "3 1 1 3 3 2 1 1 3 3 2 2 0 2 0 0 0 1 0 0 0 1 0 0 0 1 1 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"),
               "same block column twice");
 }
 

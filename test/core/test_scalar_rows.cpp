@@ -5,13 +5,13 @@
 // islands and whatever the thread count. Problems: a frictionless LCP (W = J M⁻¹ Jᵀ + δI of
 // random bodies) and a pyramidal-cone LCP (MuJoCo's form: four edge rows n ± μ t_k per
 // contact, one-row frictionless contacts).
-#include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/core/residual.h"
-#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "hard_case_util.h"
+#include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
+#include "lcp_contact_solver/core/residual.h"
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include <random>
 
@@ -118,7 +118,8 @@ TEST(ScalarRows, ChosenForOneRowBlockSparseProblemsOnly) {
   const Eigen::MatrixXd W = toDense(dense.W);
   Eigen::MatrixXd rebuilt = Eigen::MatrixXd::Zero(W.rows(), W.cols());
   for (int j = 0; j < columns.n; ++j)
-    for (int s = columns.start[j]; s < columns.start[j + 1]; ++s) rebuilt(columns.index[s], j) = columns.value[s];
+    for (int s = columns.start[j]; s < columns.start[j + 1]; ++s)
+      rebuilt(columns.index[s], j) = columns.value[s];
   EXPECT_EQ(rebuilt, W);
   EXPECT_EQ(columns.entries(), std::get<BlockSparseMatrix>(sparse.W).values.size());
 }
@@ -160,7 +161,8 @@ TEST(ScalarRows, SameIteratesAsTheBlockSweep) {
       ASSERT_EQ(scalar.iterations, 9) << scalar.message;
       ASSERT_EQ(block.iterations, 9);
       const int n = static_cast<int>(p.d_free.size());
-      EXPECT_LE(maxDiff(scalar.forces, block.forces.head(n)), 1e-13 * (1.0 + scalar.forces.cwiseAbs().maxCoeff()))
+      EXPECT_LE(maxDiff(scalar.forces, block.forces.head(n)),
+                1e-13 * (1.0 + scalar.forces.cwiseAbs().maxCoeff()))
           << "pyramid " << pyramid << " sor " << sor;
       EXPECT_GT(scalar.forces.cwiseAbs().maxCoeff(), 0.0);
     }
@@ -187,7 +189,8 @@ TEST(ScalarRows, SameAnswersAsOtherStoragesOnFrictionlessAndPyramidLcps) {
           const SolveResult r = solveProblem(sparse, params(kind, 1e-13, 200000, islands, threads));
           ASSERT_TRUE(r.converged) << solverName(kind) << ": " << r.message;
           EXPECT_LE(maxDiff(r.forces, reference.forces), 1e-10)
-              << solverName(kind) << " pyramid " << pyramid << " islands " << islands << " threads " << threads;
+              << solverName(kind) << " pyramid " << pyramid << " islands " << islands << " threads "
+              << threads;
           Eigen::VectorXd d;
           multiply(dense.W, r.forces, d);
           d += dense.d_free;

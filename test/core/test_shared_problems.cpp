@@ -41,9 +41,7 @@ SolverParams params(SolverKind kind, double tolerance, int max_it) {
   return p;
 }
 
-bool hasNonPositiveDiagonal(const Problem& p) {
-  return (toDense(p.W).diagonal().array() <= 0.0).any();
-}
+bool hasNonPositiveDiagonal(const Problem& p) { return (toDense(p.W).diagonal().array() <= 0.0).any(); }
 
 TEST(SharedProblemSolves, AllFilesArePresent) {
   EXPECT_EQ(problemFiles("lcp").size(), 20u);

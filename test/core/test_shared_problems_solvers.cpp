@@ -92,7 +92,8 @@ TEST(SharedProblemsSolvers, ApgdReachesOneMicroOnTheStacks) {
 
 // Cut short, apgd says so and keeps its best iterate.
 TEST(SharedProblemsSolvers, ApgdCutShortIsHonest) {
-  const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "BoxesStack1-i100000-32.hdf5.dat").string());
+  const Problem p =
+      readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "BoxesStack1-i100000-32.hdf5.dat").string());
   const SolveResult r = solveProblem(p, params(SolverKind::kApgd, 1e-10, 50));
   expectFinite(r, "BoxesStack1");
   EXPECT_EQ(r.status, SolveStatus::kMaxIterations);

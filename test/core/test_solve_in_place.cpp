@@ -62,8 +62,10 @@ Problem mixedProblem(unsigned seed) {
 Problem assembled(const Problem& body_form, bool dense) {
   Problem p = body_form;
   p.bodies.reset();
-  if (dense) p.W = body_form.bodies->toDense();
-  else p.W = body_form.bodies->assemble();
+  if (dense)
+    p.W = body_form.bodies->toDense();
+  else
+    p.W = body_form.bodies->assemble();
   return p;
 }
 
@@ -78,8 +80,9 @@ Problem withoutDiagonalBlock(const Problem& p, int skip) {
     for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
       const int j = W.block_col[b];
       if (i == skip && j == skip) continue;
-      out.addBlock(j, Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-                          W.values.data() + W.value_start[b], sizes[i], sizes[j]));
+      out.addBlock(j,
+                   Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                       W.values.data() + W.value_start[b], sizes[i], sizes[j]));
     }
   }
   Problem q = p;
@@ -161,7 +164,8 @@ TEST(SolveInPlace, EqualsTheCopyingSolveAndRestoresTheProblem) {
         ContactSolver copying(params), in_place(params);
         Problem borrowed = storage.problem;
         const SolveResult expected = copying.solve(storage.problem);
-        ASSERT_TRUE(expected.status == SolveStatus::kConverged || expected.status == SolveStatus::kMaxIterations)
+        ASSERT_TRUE(expected.status == SolveStatus::kConverged ||
+                    expected.status == SolveStatus::kMaxIterations)
             << what << ": " << expected.message;
         const SolveResult got = in_place.solveInPlace(borrowed);
         expectSameResult(got, expected, what);

@@ -73,7 +73,7 @@ Problem mixedProblem(unsigned seed) {
   for (int i = 0; i < n; ++i) p.d_free[i] = 0.5 * u(rng);
   const std::vector<int> off = p.rowOffsets();
   for (int c : {1, 2, 3, 5}) p.d_free[off[c]] = -0.5 - 0.5 * std::abs(u(rng));  // pressed normals
-  p.d_free[off[4]] = 0.3;  // this one separates
+  p.d_free[off[4]] = 0.3;                                                       // this one separates
   return p;
 }
 
@@ -86,7 +86,8 @@ Problem toBlockSparse(const Problem& dense) {
   BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
   for (std::size_t i = 0; i < sizes.size(); ++i) {
     B.beginRow();
-    for (std::size_t j = 0; j < sizes.size(); ++j) B.addBlock(static_cast<int>(j), W.block(off[i], off[j], sizes[i], sizes[j]));
+    for (std::size_t j = 0; j < sizes.size(); ++j)
+      B.addBlock(static_cast<int>(j), W.block(off[i], off[j], sizes[i], sizes[j]));
   }
   sparse.W = B;
   return sparse;
@@ -256,7 +257,8 @@ TEST(DiscSolvers, RestingContact) {
 
 TEST(DiscSolvers, SlidingOnTheConeOppositeSlip) {
   const double w = 2.0, mu = 0.5;
-  const Problem p = oneFrictionalContact(Eigen::Matrix3d::Identity() * w, Eigen::Vector3d(-1.0, 0.6, -0.8), mu);
+  const Problem p =
+      oneFrictionalContact(Eigen::Matrix3d::Identity() * w, Eigen::Vector3d(-1.0, 0.6, -0.8), mu);
   const Eigen::Vector2d expected = -mu * 0.5 * Eigen::Vector2d(0.6, -0.8).normalized();
   for (SolverKind kind : kDiscSolvers) {
     const SolveResult r = solveProblem(p, tight(kind));
@@ -271,9 +273,7 @@ TEST(DiscSolvers, SlidingOnTheConeOppositeSlip) {
 
 TEST(DiscSolvers, CoupledAnisotropicBlockStillOpposesSlip) {
   Eigen::Matrix3d W;
-  W << 2.0, 0.3, -0.2,
-       0.3, 1.5, 0.4,
-      -0.2, 0.4, 0.8;
+  W << 2.0, 0.3, -0.2, 0.3, 1.5, 0.4, -0.2, 0.4, 0.8;
   const Problem p = oneFrictionalContact(W, Eigen::Vector3d(-1.0, 2.0, -1.5), 0.3);
   const SolveResult nlgs = solveProblem(p, tight(SolverKind::kNlgs));
   for (SolverKind kind : kDiscSolvers) {
@@ -341,7 +341,8 @@ TEST(DiscSolvers, MixedContactTypesMatchNlgs) {
     ASSERT_EQ(reference.status, SolveStatus::kConverged);
     for (SolverKind kind : kDiscSolvers) {
       const SolveResult r = solveProblem(p, tight(kind, 1e-11));
-      ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind) << " seed " << seed << ": " << r.message;
+      ASSERT_EQ(r.status, SolveStatus::kConverged)
+          << solverName(kind) << " seed " << seed << ": " << r.message;
       EXPECT_LE((r.forces - reference.forces).norm(), 1e-8 * reference.forces.norm()) << solverName(kind);
       EXPECT_EQ(r.forces[p.rowOffsets()[3] + 1], 0.0);  // μ = 0 tangents stay exactly zero
     }
@@ -355,7 +356,8 @@ TEST(DiscSolvers, RandomWellPosedProblemsMatchNlgs) {
     ASSERT_EQ(reference.status, SolveStatus::kConverged) << seed;
     for (SolverKind kind : kDiscSolvers) {
       const SolveResult r = solveProblem(p, tight(kind, 1e-11));
-      ASSERT_EQ(r.status, SolveStatus::kConverged) << solverName(kind) << " seed " << seed << ": " << r.message;
+      ASSERT_EQ(r.status, SolveStatus::kConverged)
+          << solverName(kind) << " seed " << seed << ": " << r.message;
       EXPECT_LE(r.residual, 1e-11);
       EXPECT_LE((r.forces - reference.forces).norm(), 1e-7 * reference.forces.norm())
           << solverName(kind) << " seed " << seed;
@@ -388,7 +390,11 @@ TEST(DiscSolvers, RegularizationMinWAndWarmStartStillApply) {
     EXPECT_LE((r.forces - solveProblem(p, nlgs).forces).norm(), 1e-7 * r.forces.norm());
     // Warm start from the answer: done at once.
     ContactSolver solver(params);
-    solver.setParams([&] { SolverParams w = params; w.initial_guess = true; return w; }());
+    solver.setParams([&] {
+      SolverParams w = params;
+      w.initial_guess = true;
+      return w;
+    }());
     const SolveResult first = solver.solve(p);
     const SolveResult second = solver.solve(p);
     ASSERT_EQ(second.status, SolveStatus::kConverged);
@@ -462,17 +468,17 @@ TEST(Pyramid, BoxOnInclineSticksUpToThePyramidThreshold) {
     double threshold;  // slope (tan α) at which it starts to slide
   };
   const Case cases[] = {
-      {FrictionModel::kPyramid4, 0.0, mu},                              // along a facet normal
+      {FrictionModel::kPyramid4, 0.0, mu},  // along a facet normal
       {FrictionModel::kPyramid4, 0.5 * pi, mu},
-      {FrictionModel::kPyramid4, 0.25 * pi, mu * std::sqrt(2.0)},       // toward a corner
+      {FrictionModel::kPyramid4, 0.25 * pi, mu * std::sqrt(2.0)},  // toward a corner
       {FrictionModel::kPyramid8, 0.0, mu},
-      {FrictionModel::kPyramid8, 0.25 * pi, mu},                        // facet normal at 45°
+      {FrictionModel::kPyramid8, 0.25 * pi, mu},                          // facet normal at 45°
       {FrictionModel::kPyramid8, 0.125 * pi, mu / std::cos(0.125 * pi)},  // toward a corner
   };
   for (const Case& c : cases) {
     for (SolverKind kind : {SolverKind::kPgs, SolverKind::kLemke}) {
-      const std::string what = std::string(frictionModelName(c.model)) + " " + solverName(kind) +
-                               " theta " + std::to_string(c.theta);
+      const std::string what = std::string(frictionModelName(c.model)) + " " + solverName(kind) + " theta " +
+                               std::to_string(c.theta);
       // Just below the threshold: sticks (no tangential velocity).
       const double below = 0.999 * c.threshold;
       const SolveResult stick = solveProblem(incline(below, c.theta, mu), pyramidParams(kind, c.model));
@@ -608,11 +614,11 @@ TEST(TimeBudget, EveryIterativeSolverStopsWithItsBestIterate) {
     SolverKind kind;
     FrictionModel model;
   };
-  for (const Run& run : {Run{SolverKind::kNlgs, FrictionModel::kCoulombDisc},
-                         Run{SolverKind::kApgd, FrictionModel::kCoulombDisc},
-                         Run{SolverKind::kNewton, FrictionModel::kCoulombDisc},
-                         Run{SolverKind::kPgs, FrictionModel::kPyramid4},
-                         Run{SolverKind::kLemke, FrictionModel::kPyramid8}}) {
+  for (const Run& run :
+       {Run{SolverKind::kNlgs, FrictionModel::kCoulombDisc},
+        Run{SolverKind::kApgd, FrictionModel::kCoulombDisc},
+        Run{SolverKind::kNewton, FrictionModel::kCoulombDisc},
+        Run{SolverKind::kPgs, FrictionModel::kPyramid4}, Run{SolverKind::kLemke, FrictionModel::kPyramid8}}) {
     SolverParams params = tight(run.kind, 1e-300);
     params.maxIt = 100000000;
     params.time_budget = 1e-3;

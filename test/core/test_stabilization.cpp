@@ -74,7 +74,8 @@ TEST(Stabilization, SeparatedOrUncorrectedContactsAreUntouched) {
   }
   // β = 0, no softness: bit-identical to the same problem without any gap.
   Problem plain;
-  plain.contacts = {Contact{1, ContactType::kFrictional, 3, 0.5}, Contact{2, ContactType::kFrictional, 3, 0.3}};
+  plain.contacts = {Contact{1, ContactType::kFrictional, 3, 0.5},
+                    Contact{2, ContactType::kFrictional, 3, 0.3}};
   Eigen::MatrixXd A = Eigen::MatrixXd::Random(6, 6);
   plain.W = Eigen::MatrixXd(A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(6, 6));
   plain.d_free = Eigen::VectorXd::Random(6);

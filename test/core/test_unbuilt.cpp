@@ -7,8 +7,8 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
@@ -99,7 +99,8 @@ RandomScene randomScene(int nbodies, int ncontacts, unsigned seed, const Mix& mi
   for (const Contact& c : s.problem.contacts) {
     for (int k = 0; k < c.rows; ++k) {
       const bool normal = k == 0 && c.type != ContactType::kBilateral;
-      s.problem.d_free[row + k] = normal ? -1e-3 * (0.2 + pos(rng)) + (pos(rng) < 0.15 ? 3e-3 : 0.0) : 4e-4 * u(rng);
+      s.problem.d_free[row + k] =
+          normal ? -1e-3 * (0.2 + pos(rng)) + (pos(rng) < 0.15 ? 3e-3 : 0.0) : 4e-4 * u(rng);
     }
     row += c.rows;
   }
@@ -156,7 +157,9 @@ void expectSameAsBuilt(const Problem& p, const SolverParams& params, double tol 
     EXPECT_EQ(u.status, s.status);
   }
   EXPECT_EQ(u.solver, d.solver);
-  EXPECT_LT(relDiff(u.forces, d.forces), tol) << "unbuilt vs dense\n" << u.forces.transpose() << "\n" << d.forces.transpose();
+  EXPECT_LT(relDiff(u.forces, d.forces), tol) << "unbuilt vs dense\n"
+                                              << u.forces.transpose() << "\n"
+                                              << d.forces.transpose();
   EXPECT_LT(relDiff(u.forces, s.forces), tol) << "unbuilt vs block-sparse";
   EXPECT_LT(relDiff(u.d, d.d), 1e-6) << "d = W λ + d_free through the body form";
   EXPECT_EQ(u.states, d.states);
@@ -240,9 +243,11 @@ TEST(BodyCompliance, MalformedBodyFormsAreRefusedWithASentence) {
     std::function<void(Problem&, BodyCompliance&)> spoil;
   };
   const std::vector<Case> cases = {
-      {"both an assembled W and the body form", [](Problem& p, BodyCompliance&) { p.W = Eigen::MatrixXd::Identity(p.rowCount(), p.rowCount()); }},
+      {"both an assembled W and the body form",
+       [](Problem& p, BodyCompliance&) { p.W = Eigen::MatrixXd::Identity(p.rowCount(), p.rowCount()); }},
       {"contacts, the problem has", [](Problem&, BodyCompliance& b) { b.contacts.pop_back(); }},
-      {"rows, the contact has", [](Problem& p, BodyCompliance&) {
+      {"rows, the contact has",
+       [](Problem& p, BodyCompliance&) {
          p.contacts[0].type = ContactType::kBilateral;
          p.contacts[0].rows = p.contacts[0].rows == 3 ? 2 : 3;
          p.d_free.resize(p.rowCount());
@@ -250,11 +255,16 @@ TEST(BodyCompliance, MalformedBodyFormsAreRefusedWithASentence) {
        }},
       {"outside -1..2", [](Problem&, BodyCompliance& b) { b.contacts[1].body_a = 3; }},
       {"outside -1..2", [](Problem&, BodyCompliance& b) { b.contacts[1].body_b = -2; }},
-      {"Jacobian on body_a", [](Problem&, BodyCompliance& b) { b.contacts[2].jacobian_a.resize(b.contacts[2].rows == 3 ? 2 : 3, 6); }},
-      {"non-finite Jacobian", [](Problem&, BodyCompliance& b) { b.contacts[0].jacobian_a(0, 4) = std::nan(""); }},
+      {"Jacobian on body_a",
+       [](Problem&, BodyCompliance& b) {
+         b.contacts[2].jacobian_a.resize(b.contacts[2].rows == 3 ? 2 : 3, 6);
+       }},
+      {"non-finite Jacobian",
+       [](Problem&, BodyCompliance& b) { b.contacts[0].jacobian_a(0, 4) = std::nan(""); }},
       {"non-finite compliance", [](Problem&, BodyCompliance& b) { b.body_compliance[1](2, 2) = INFINITY; }},
       {"diagonal has", [](Problem&, BodyCompliance& b) { b.diagonal = Eigen::VectorXd::Zero(2); }},
-      {"diagonal holds a non-finite", [](Problem&, BodyCompliance& b) {
+      {"diagonal holds a non-finite",
+       [](Problem&, BodyCompliance& b) {
          b.diagonal = Eigen::VectorXd::Zero(b.rowCount());
          b.diagonal[1] = std::nan("");
        }},
@@ -321,7 +331,8 @@ TEST(Unbuilt, TorsionalAndRollingContactsGiveTheBuiltForces) {
   s.problem.d_free.resize(s.bodies.rowCount());
   int row = 0;
   for (const Contact& c : s.problem.contacts) {
-    for (int k = 0; k < c.rows; ++k) s.problem.d_free[row + k] = k == 0 ? -1e-3 * (1.2 + u(rng)) : 3e-4 * u(rng);
+    for (int k = 0; k < c.rows; ++k)
+      s.problem.d_free[row + k] = k == 0 ? -1e-3 * (1.2 + u(rng)) : 3e-4 * u(rng);
     row += c.rows;
   }
   s.problem.bodies = std::make_shared<const BodyCompliance>(s.bodies);

@@ -28,9 +28,11 @@ std::string datReaderOneInput(const std::uint8_t* data, std::size_t size) {
     return "reader returned an invalid problem: " + fault;
   // Solve with small caps (the fuzzer must stay fast): every solver that takes the size.
   const int rows = problem.rowCount();
-  for (lcs::core::SolverKind kind : {lcs::core::SolverKind::kAuto, lcs::core::SolverKind::kPgs, lcs::core::SolverKind::kNlgs,
-                               lcs::core::SolverKind::kLemke, lcs::core::SolverKind::kApgd, lcs::core::SolverKind::kNewton}) {
-    if ((kind == lcs::core::SolverKind::kLemke || kind == lcs::core::SolverKind::kNewton) && rows > 300) continue;
+  for (lcs::core::SolverKind kind :
+       {lcs::core::SolverKind::kAuto, lcs::core::SolverKind::kPgs, lcs::core::SolverKind::kNlgs,
+        lcs::core::SolverKind::kLemke, lcs::core::SolverKind::kApgd, lcs::core::SolverKind::kNewton}) {
+    if ((kind == lcs::core::SolverKind::kLemke || kind == lcs::core::SolverKind::kNewton) && rows > 300)
+      continue;
     lcs::core::SolverParams params;
     params.solver = kind;
     params.maxIt = 30;
@@ -40,7 +42,8 @@ std::string datReaderOneInput(const std::uint8_t* data, std::size_t size) {
     if (std::string err = checkResult(problem, params, a); !err.empty())
       return std::string(lcs::core::solverName(kind)) + ": " + err;
     const lcs::core::SolveResult b = lcs::core::solveProblem(problem, params);
-    if (std::string err = checkDeterministic(a, b); !err.empty()) return std::string(lcs::core::solverName(kind)) + ": " + err;
+    if (std::string err = checkDeterministic(a, b); !err.empty())
+      return std::string(lcs::core::solverName(kind)) + ": " + err;
   }
   return "";
 }

@@ -166,14 +166,16 @@ Compliance readCompliance(FuzzInput& in, const Shape& shape, const ContactArray&
   return msg;
 }
 
-bool finite(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool finite(const geometry_msgs::Point& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 
 std::string checkMarkers(const visualization_msgs::MarkerArray& markers) {
   for (const visualization_msgs::Marker& m : markers.markers) {
     const auto& pose = m.pose;
     if (!finite(pose.position) || !std::isfinite(pose.orientation.x) || !std::isfinite(pose.orientation.y) ||
-        !std::isfinite(pose.orientation.z) || !std::isfinite(pose.orientation.w) || !std::isfinite(m.scale.x) ||
-        !std::isfinite(m.scale.y) || !std::isfinite(m.scale.z))
+        !std::isfinite(pose.orientation.z) || !std::isfinite(pose.orientation.w) ||
+        !std::isfinite(m.scale.x) || !std::isfinite(m.scale.y) || !std::isfinite(m.scale.z))
       return "marker " + m.ns + " has a non-finite pose or scale";
     for (const geometry_msgs::Point& p : m.points)
       if (!finite(p)) return "marker " + m.ns + " has a non-finite point";
@@ -187,8 +189,8 @@ std::string checkMarkers(const visualization_msgs::MarkerArray& markers) {
 std::string run(FuzzInput& in) {
   const lcs::core::SolverParams params = readParams(in);
   const std::uint8_t shape_bits = in.byte();
-  const Shape shape{(shape_bits & 1) != 0, (shape_bits & 2) != 0, (shape_bits & 4) != 0, (shape_bits & 8) != 0,
-                    (shape_bits & 16) != 0};
+  const Shape shape{(shape_bits & 1) != 0, (shape_bits & 2) != 0, (shape_bits & 4) != 0,
+                    (shape_bits & 8) != 0, (shape_bits & 16) != 0};
   const ContactArray contacts = readContacts(in, shape);
   const Compliance compliance = readCompliance(in, shape, contacts);
   lcp_contact_solver_ros::DisplayOptions display;
@@ -208,7 +210,8 @@ std::string run(FuzzInput& in) {
   }
   if (std::string err = checkResult(a.problem, first.params(), a.result); !err.empty()) return err;
   if (std::string err = checkDeterministic(a.result, b.result); !err.empty()) return err;
-  if (a.gave_forces && a.has_forces && !lcp_contact_solver_ros::allFinite(a.forces)) return "non-finite forces message";
+  if (a.gave_forces && a.has_forces && !lcp_contact_solver_ros::allFinite(a.forces))
+    return "non-finite forces message";
   if (a.has_forces && a.forces.forces.size() != contacts.contacts.size()) return "forces message size";
   const visualization_msgs::MarkerArray markers = lcp_contact_solver_ros::buildMarkers(
       contacts.header, a.frames, a.problem, a.result, lcs::core::effectiveMu(a.problem, params.mu), display);

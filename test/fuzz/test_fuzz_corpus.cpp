@@ -51,7 +51,8 @@ TEST(FuzzCorpus, MsgSolve) { replay("msg_solve", lcs_fuzz::msgSolveOneInput); }
 TEST(FuzzCorpus, MalformedProblemFiles) {
   for (const auto& entry : fs::directory_iterator(fs::path(LCS_TEST_DATA_DIR) / "malformed")) {
     const std::string bytes = bytesOf(entry.path());
-    EXPECT_EQ(lcs_fuzz::datReaderOneInput(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), "")
+    EXPECT_EQ(lcs_fuzz::datReaderOneInput(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()),
+              "")
         << entry.path().filename();
   }
 }

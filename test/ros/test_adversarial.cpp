@@ -62,20 +62,25 @@ bool waitFor(Predicate done, double timeout = 10.0) {
   return done();
 }
 
-bool finite(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool finite(const geometry_msgs::Point& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 
 // Everything the node publishes, checked for non-finite numbers as it arrives.
 class Watch {
  public:
   explicit Watch(ros::NodeHandle& nh) {
-    forces_sub_ = nh.subscribe<lcs::ConstraintForces>("constraint_forces", 100, [this](const lcs::ConstraintForces::ConstPtr& m) {
-      forces_[m->header.stamp] = *m;
-      if (!lcp_contact_solver_ros::allFinite(*m)) ++non_finite_;
-    });
-    stats_sub_ = nh.subscribe<lcs::SolverStats>(kSolver + "/stats", 100, [this](const lcs::SolverStats::ConstPtr& m) {
-      stats_[m->header.stamp] = *m;
-      if (!lcp_contact_solver_ros::allFinite(*m)) ++non_finite_;
-    });
+    forces_sub_ = nh.subscribe<lcs::ConstraintForces>("constraint_forces", 100,
+                                                      [this](const lcs::ConstraintForces::ConstPtr& m) {
+                                                        forces_[m->header.stamp] = *m;
+                                                        if (!lcp_contact_solver_ros::allFinite(*m))
+                                                          ++non_finite_;
+                                                      });
+    stats_sub_ =
+        nh.subscribe<lcs::SolverStats>(kSolver + "/stats", 100, [this](const lcs::SolverStats::ConstPtr& m) {
+          stats_[m->header.stamp] = *m;
+          if (!lcp_contact_solver_ros::allFinite(*m)) ++non_finite_;
+        });
     markers_sub_ = nh.subscribe<visualization_msgs::MarkerArray>(
         kSolver + "/markers", 100, [this](const visualization_msgs::MarkerArray::ConstPtr& m) {
           ++markers_;
@@ -87,7 +92,8 @@ class Watch {
         });
   }
   bool connected() const {
-    return forces_sub_.getNumPublishers() > 0 && stats_sub_.getNumPublishers() > 0 && markers_sub_.getNumPublishers() > 0;
+    return forces_sub_.getNumPublishers() > 0 && stats_sub_.getNumPublishers() > 0 &&
+           markers_sub_.getNumPublishers() > 0;
   }
   const lcs::SolverStats* stats(const ros::Time& stamp) const {
     const auto it = stats_.find(stamp);
@@ -124,8 +130,10 @@ std::vector<Fault> faults() {
       {"Inf normal", [](Scene* s) { s->contacts.contacts[3].normal.x = kInf; }, "non-finite direction"},
       {"NaN tangent", [](Scene* s) { s->contacts.contacts[1].tangent1.x = kNaN; }, "non-finite direction"},
       {"Inf tangent", [](Scene* s) { s->contacts.contacts[1].tangent2.z = kInf; }, "non-finite direction"},
-      {"NaN d_free", [](Scene* s) { s->contacts.contacts[1].d_free[2] = kNaN; }, "d_free holds a non-finite value"},
-      {"Inf d_free", [](Scene* s) { s->contacts.contacts[3].d_free[0] = -kInf; }, "d_free holds a non-finite value"},
+      {"NaN d_free", [](Scene* s) { s->contacts.contacts[1].d_free[2] = kNaN; },
+       "d_free holds a non-finite value"},
+      {"Inf d_free", [](Scene* s) { s->contacts.contacts[3].d_free[0] = -kInf; },
+       "d_free holds a non-finite value"},
       {"NaN mu", [](Scene* s) { s->contacts.contacts[1].mu = kNaN; }, "non-finite mu"},
       {"Inf mu", [](Scene* s) { s->contacts.contacts[1].mu = kInf; }, "non-finite mu"},
       {"negative mu", [](Scene* s) { s->contacts.contacts[0].mu = -0.5; }, "negative mu"},
@@ -133,25 +141,32 @@ std::vector<Fault> faults() {
        "negative or non-finite mu_torsional"},
       {"NaN mu_rolling", [](Scene* s) { s->contacts.contacts[1].mu_rolling = kNaN; },
        "negative or non-finite mu_rolling"},
-      {"torsional with 3 values", [](Scene* s) { s->contacts.contacts[0].type = lcs::ContactPoint::TORSIONAL; },
+      {"torsional with 3 values",
+       [](Scene* s) { s->contacts.contacts[0].type = lcs::ContactPoint::TORSIONAL; },
        "3 d_free values for 4 rows"},
-      {"rolling rows 4", [](Scene* s) {
+      {"rolling rows 4",
+       [](Scene* s) {
          s->contacts.contacts[0].type = lcs::ContactPoint::ROLLING;
          s->contacts.contacts[0].rows = 4;
-       }, "rows=4 but its type has 6"},
+       },
+       "rows=4 but its type has 6"},
       {"NaN gap", [](Scene* s) { s->contacts.contacts[0].gap = kNaN; }, "non-finite gap"},
       {"Inf gap", [](Scene* s) { s->contacts.contacts[2].gap = -kInf; }, "non-finite gap"},
       {"erp above 1", [](Scene* s) { s->contacts.contacts[1].erp = 1.5; }, "outside [0, 1]"},
       {"NaN erp", [](Scene* s) { s->contacts.contacts[1].erp = kNaN; }, "outside [0, 1]"},
-      {"negative softness", [](Scene* s) { s->contacts.contacts[0].softness = -1e-3; }, "negative or non-finite softness"},
-      {"Inf softness", [](Scene* s) { s->contacts.contacts[0].softness = kInf; }, "negative or non-finite softness"},
+      {"negative softness", [](Scene* s) { s->contacts.contacts[0].softness = -1e-3; },
+       "negative or non-finite softness"},
+      {"Inf softness", [](Scene* s) { s->contacts.contacts[0].softness = kInf; },
+       "negative or non-finite softness"},
       {"NaN W", [](Scene* s) { s->compliance.data[10] = kNaN; }, "W holds a non-finite value"},
       {"Inf W", [](Scene* s) { s->compliance.data[80] = kInf; }, "W holds a non-finite value"},
       {"zero normal", [](Scene* s) { s->contacts.contacts[2].normal = vec(0, 0, 0); }, "zero normal"},
       {"tiny normal", [](Scene* s) { s->contacts.contacts[2].normal = vec(1e-12, 0, 0); }, "zero normal"},
-      {"duplicated id", [](Scene* s) { s->contacts.contacts[2].id = s->contacts.contacts[0].id; }, "repeats an id"},
+      {"duplicated id", [](Scene* s) { s->contacts.contacts[2].id = s->contacts.contacts[0].id; },
+       "repeats an id"},
       {"empty array", [](Scene* s) { s->contacts.contacts.clear(); }, "empty"},
-      {"d_free size", [](Scene* s) { s->contacts.contacts[0].d_free.push_back(0.0); }, "4 d_free values for 3 rows"},
+      {"d_free size", [](Scene* s) { s->contacts.contacts[0].d_free.push_back(0.0); },
+       "4 d_free values for 3 rows"},
       {"W row count", [](Scene* s) { s->compliance.rows = 10; }, "rows=10, the contacts have 9"},
       {"W values for another size",
        [](Scene* s) {
@@ -178,7 +193,8 @@ std::vector<Fault> faults() {
          c.d_free = {-0.01};
          c.mu = 0.0;
          s->contacts.contacts.assign(100000, c);
-         for (std::size_t i = 0; i < s->contacts.contacts.size(); ++i) s->contacts.contacts[i].id = static_cast<std::int64_t>(i);
+         for (std::size_t i = 0; i < s->contacts.contacts.size(); ++i)
+           s->contacts.contacts[i].id = static_cast<std::int64_t>(i);
          s->compliance.rows = 100000;
          s->compliance.data.clear();
        },
@@ -192,7 +208,8 @@ std::vector<Fault> blockFaults() {
   return {
       {"NaN block", [](Scene* s) { s->compliance.block_data[5] = kNaN; }, "W holds a non-finite value"},
       {"block index", [](Scene* s) { s->compliance.block_rows[2] = 4000000000u; }, "beyond the 4 contacts"},
-      {"block twice", [](Scene* s) { s->compliance.block_cols[1] = s->compliance.block_cols[0]; }, "given twice"},
+      {"block twice", [](Scene* s) { s->compliance.block_cols[1] = s->compliance.block_cols[0]; },
+       "given twice"},
       {"block data size", [](Scene* s) { s->compliance.block_data.pop_back(); }, "its blocks need"},
       {"block index lists", [](Scene* s) { s->compliance.block_rows.push_back(0); }, "block_cols"},
   };
@@ -205,14 +222,16 @@ class AdversarialTest : public ::testing::Test {
     compliance_pub_ = nh_.advertise<lcs::Compliance>("compliance", 10);
     watch_ = std::make_unique<Watch>(nh_);
     ASSERT_TRUE(waitFor([&] {
-      return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 && watch_->connected();
+      return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 &&
+             watch_->connected();
     })) << "the solver did not connect";
   }
 
   const lcs::SolverStats* solve(const Scene& scene, double timeout = 10.0) {
     compliance_pub_.publish(scene.compliance);
     contacts_pub_.publish(scene.contacts);
-    if (!waitFor([&] { return watch_->stats(scene.contacts.header.stamp) != nullptr; }, timeout)) return nullptr;
+    if (!waitFor([&] { return watch_->stats(scene.contacts.header.stamp) != nullptr; }, timeout))
+      return nullptr;
     return watch_->stats(scene.contacts.header.stamp);
   }
 
@@ -228,13 +247,15 @@ class AdversarialTest : public ::testing::Test {
     lcs::core::Problem problem;
     std::vector<lcp_contact_solver_ros::ContactFrame> frames;
     ASSERT_EQ(lcp_contact_solver_ros::toProblem(good.contacts, good.compliance, 0, &problem, &frames), "");
-    const lcs::core::SolveResult expected = lcs::core::solveProblem(problem, lcp_contact_solver_ros::defaultSolverParams());
+    const lcs::core::SolveResult expected =
+        lcs::core::solveProblem(problem, lcp_contact_solver_ros::defaultSolverParams());
     const lcs::ConstraintForces& got = *watch_->forces(good.contacts.header.stamp);
     ASSERT_EQ(got.forces.size(), problem.contacts.size());
     const std::vector<int> off = problem.rowOffsets();
     for (std::size_t i = 0; i < problem.contacts.size(); ++i)
       for (int k = 0; k < problem.contacts[i].rows; ++k)
-        EXPECT_NEAR(got.forces[i].lambda[k], expected.forces[off[i] + k], 1e-12) << after << ": contact " << i;
+        EXPECT_NEAR(got.forces[i].lambda[k], expected.forces[off[i] + k], 1e-12)
+            << after << ": contact " << i;
   }
 
   ros::NodeHandle nh_;
@@ -263,7 +284,8 @@ TEST_F(AdversarialTest, TopicsRejectEveryFaultAndGoOn) {
       EXPECT_EQ(stats->message.find('\n'), std::string::npos) << fault.name;
       // Nothing for the bad stamp: give a late message time to arrive, then look.
       expectGoodSolve(fault.name);
-      EXPECT_EQ(watch_->forces(scene.contacts.header.stamp), nullptr) << fault.name << ": forces were published";
+      EXPECT_EQ(watch_->forces(scene.contacts.header.stamp), nullptr)
+          << fault.name << ": forces were published";
     }
   }
   EXPECT_EQ(watch_->nonFinite(), 0);
@@ -305,10 +327,10 @@ TEST_F(AdversarialTest, ServiceRejectsEveryFaultAndGoesOn) {
 // Bad parameter overrides through the service: named, refused, the node unchanged.
 TEST_F(AdversarialTest, ServiceRejectsBadOverrides) {
   const Scene scene = makeScene(freshIds(), freshStamp());
-  for (const char* bad : {"tolerance=nan", "tolerance=-1", "maxIt=0", "mu=-2", "mu=inf", "sor=2",
-                          "regularizationTerm=-1", "solver=simplex", "max_rows=-5", "maxIt=1e99", "nonsense",
-                          "=1", "time_budget=nan", "erp=1.5", "erp=-0.1", "softness=-1", "softness=inf",
-                          "constraint_level=acceleration", "time_step=-0.01"}) {
+  for (const char* bad :
+       {"tolerance=nan", "tolerance=-1", "maxIt=0", "mu=-2", "mu=inf", "sor=2", "regularizationTerm=-1",
+        "solver=simplex", "max_rows=-5", "maxIt=1e99", "nonsense", "=1", "time_budget=nan", "erp=1.5",
+        "erp=-0.1", "softness=-1", "softness=inf", "constraint_level=acceleration", "time_step=-0.01"}) {
     lcs::SolveContacts srv;
     srv.request.contacts = scene.contacts;
     srv.request.compliance = scene.compliance;
@@ -331,7 +353,8 @@ TEST_F(AdversarialTest, ExtremeButValidNumbersPublishNothingNonFinite) {
       c.position.x = position;
       for (double& d : c.d_free) d = -1.0;
     }
-    for (std::size_t i = 0; i < scene.compliance.data.size(); ++i) scene.compliance.data[i] = i % 10 == 0 ? 1e-300 : 0.0;
+    for (std::size_t i = 0; i < scene.compliance.data.size(); ++i)
+      scene.compliance.data[i] = i % 10 == 0 ? 1e-300 : 0.0;
     const lcs::SolverStats* stats = solve(scene);
     ASSERT_NE(stats, nullptr);
     EXPECT_TRUE(lcp_contact_solver_ros::allFinite(*stats));
@@ -361,7 +384,8 @@ TEST_F(AdversarialTest, NonUnitNormalsAreNormalized) {
   for (double scale : {1e-6, 1e6}) {
     Scene scaled = unit;
     for (auto& c : scaled.contacts.contacts) {
-      if (c.tangent1.x != 0.0 || c.tangent1.y != 0.0 || c.tangent1.z != 0.0) continue;  // given tangents: keep n
+      if (c.tangent1.x != 0.0 || c.tangent1.y != 0.0 || c.tangent1.z != 0.0)
+        continue;  // given tangents: keep n
       c.normal.x *= scale;
       c.normal.y *= scale;
       c.normal.z *= scale;

@@ -4,11 +4,11 @@
 // a good bag, a message whose array length runs past its end, one whose length claims
 // terabytes, a topic of the wrong type, bytes flipped in a compressed chunk): a clear
 // one-line error or rejected cycles, exit status 2 for an unreadable bag, never a crash.
-#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "replay/replay_command.h"
-#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <gtest/gtest.h>
@@ -79,7 +79,8 @@ TEST(ConversionLimits, HardRowLimitWithoutMaxRows) {
   c.rows = 6;
   c.d_free.assign(6, -0.01);
   s.contacts.contacts.assign(166667, c);
-  for (std::size_t i = 0; i < s.contacts.contacts.size(); ++i) s.contacts.contacts[i].id = static_cast<std::int64_t>(i);
+  for (std::size_t i = 0; i < s.contacts.contacts.size(); ++i)
+    s.contacts.contacts[i].id = static_cast<std::int64_t>(i);
   s.compliance.rows = 1000002;
   s.compliance.data.clear();
   lcs::core::Problem problem;
@@ -194,7 +195,8 @@ TEST(MalformedBags, BadMessagesInAGoodBagAreRejectedCycles) {
 TEST(MalformedBags, CorruptArrayLengthsAreReadErrors) {
   for (std::uint32_t claimed : {6u, 0xFFFFFFFFu}) {
     if (claimed == 0xFFFFFFFFu && LCS_UNDER_ASAN) {
-      std::printf("  contacts length %u: skipped under AddressSanitizer (its new cannot throw bad_alloc)\n", claimed);
+      std::printf("  contacts length %u: skipped under AddressSanitizer (its new cannot throw bad_alloc)\n",
+                  claimed);
       continue;
     }
     const std::string good = tmpFile("good_for_length.bag");
@@ -244,7 +246,8 @@ TEST(MalformedBags, WrongTypesAndCorruptChunks) {
     }
     std::string bytes = readBytes(good);
     // Flip a run of bytes in the middle of the file (inside the chunk data).
-    for (std::size_t i = bytes.size() / 3; i < bytes.size() / 3 + 64; ++i) bytes[i] = static_cast<char>(~bytes[i]);
+    for (std::size_t i = bytes.size() / 3; i < bytes.size() / 3 + 64; ++i)
+      bytes[i] = static_cast<char>(~bytes[i]);
     const std::string corrupt = tmpFile("corrupt_chunk.bag");
     writeBytes(corrupt, bytes);
     ReplayOptions options;
@@ -256,8 +259,8 @@ TEST(MalformedBags, WrongTypesAndCorruptChunks) {
     std::string out, err;
     const int code = runReplay({corrupt, "--quiet"}, &out, &err);
     EXPECT_TRUE(code == 0 || code == 2) << code << ": " << err;
-    std::printf("  corrupt %s chunk: exit %d, %s", compression == rosbag::compression::LZ4 ? "lz4" : "bz2", code,
-                err.empty() ? "no error\n" : err.c_str());
+    std::printf("  corrupt %s chunk: exit %d, %s", compression == rosbag::compression::LZ4 ? "lz4" : "bz2",
+                code, err.empty() ? "no error\n" : err.c_str());
   }
 }
 

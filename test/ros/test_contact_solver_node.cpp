@@ -3,8 +3,8 @@
 // solve of the same problem.
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/node/markers.h"
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/markers.h"
 #include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
@@ -64,7 +64,8 @@ template <typename M>
 class Inbox {
  public:
   Inbox(ros::NodeHandle& nh, const std::string& topic) {
-    sub_ = nh.subscribe<M>(topic, 50, [this](const typename M::ConstPtr& msg) { by_stamp_[msg->header.stamp] = *msg; });
+    sub_ = nh.subscribe<M>(topic, 50,
+                           [this](const typename M::ConstPtr& msg) { by_stamp_[msg->header.stamp] = *msg; });
   }
   bool connected() const { return sub_.getNumPublishers() > 0; }
   const M* get(const ros::Time& stamp) const {
@@ -87,7 +88,8 @@ class ContactSolverNodeTest : public ::testing::Test {
     compliance_pub_ = nh_.advertise<lcs::Compliance>("compliance", 10);
     stats_ = std::make_unique<Inbox<lcs::SolverStats>>(nh_, kSolver + "/stats");
     ASSERT_TRUE(waitFor([&] {
-      return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 && stats_->connected();
+      return contacts_pub_.getNumSubscribers() > 0 && compliance_pub_.getNumSubscribers() > 0 &&
+             stats_->connected();
     })) << "the solver did not connect";
   }
 
@@ -147,8 +149,9 @@ class ContactSolverNodeTest : public ::testing::Test {
   }
 
   // What the core gives for the same messages, parameters as in config/default.yaml.
-  static lcs::core::SolveResult directSolve(const Scene& scene, lcs::core::Problem* problem = nullptr,
-                                      std::vector<lcp_contact_solver_ros::ContactFrame>* frames = nullptr) {
+  static lcs::core::SolveResult directSolve(
+      const Scene& scene, lcs::core::Problem* problem = nullptr,
+      std::vector<lcp_contact_solver_ros::ContactFrame>* frames = nullptr) {
     lcs::core::Problem p;
     std::vector<lcp_contact_solver_ros::ContactFrame> f;
     EXPECT_EQ(lcp_contact_solver_ros::toProblem(scene.contacts, scene.compliance, 0, &p, &f), "");
@@ -166,7 +169,8 @@ class ContactSolverNodeTest : public ::testing::Test {
       EXPECT_EQ(msg.forces[i].state, static_cast<std::uint8_t>(result.states[i]));
       ASSERT_EQ(msg.forces[i].lambda.size(), static_cast<std::size_t>(problem.contacts[i].rows));
       for (int k = 0; k < problem.contacts[i].rows; ++k)
-        EXPECT_NEAR(msg.forces[i].lambda[k], result.forces[offsets[i] + k], 1e-12) << "contact " << i << " row " << k;
+        EXPECT_NEAR(msg.forces[i].lambda[k], result.forces[offsets[i] + k], 1e-12)
+            << "contact " << i << " row " << k;
     }
   }
 
@@ -251,7 +255,7 @@ TEST_F(ContactSolverNodeTest, ServiceAppliesErpAndSoftnessPerSolveAndPerContact)
     c.erp = lcs::ContactPoint::USE_DEFAULT;
     c.softness = lcs::ContactPoint::USE_DEFAULT;
   }
-  scene.contacts.contacts[1].erp = 0.5;  // its own β
+  scene.contacts.contacts[1].erp = 0.5;       // its own β
   scene.contacts.contacts[2].softness = 0.3;  // its own softness
   lcs::SolveContacts srv;
   srv.request.contacts = scene.contacts;
@@ -319,7 +323,8 @@ TEST_F(ContactSolverNodeTest, BodyFormSolvesUnbuiltWithBuildLcpFalse) {
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     EXPECT_EQ(srv.response.forces.forces[i].state, static_cast<std::uint8_t>(built.states[i])) << i;
     for (int k = 0; k < problem.contacts[i].rows; ++k)
-      EXPECT_NEAR(srv.response.forces.forces[i].lambda[k], built.forces[offsets[i] + k], 1e-8 * scale) << i << ", " << k;
+      EXPECT_NEAR(srv.response.forces.forces[i].lambda[k], built.forces[offsets[i] + k], 1e-8 * scale)
+          << i << ", " << k;
   }
 
   // build_lcp=true: W assembled once, the same forces, no unbuilt note.
@@ -335,7 +340,8 @@ TEST_F(ContactSolverNodeTest, BodyFormSolvesUnbuiltWithBuildLcpFalse) {
   srv.request.param_overrides = {"build_lcp=false", "solver=newton", "tolerance=1e-10"};
   ASSERT_TRUE(ros::service::call(kSolver + "/solve_contacts", srv));
   ASSERT_TRUE(srv.response.success) << srv.response.message;
-  EXPECT_NE(srv.response.message.find("newton needs the assembled W"), std::string::npos) << srv.response.message;
+  EXPECT_NE(srv.response.message.find("newton needs the assembled W"), std::string::npos)
+      << srv.response.message;
 
   // A malformed body form is refused with its sentence.
   srv.request.compliance.contact_bodies[4] = 7;
@@ -375,7 +381,8 @@ TEST_F(ContactSolverNodeTest, BadMessagesAreRejectedAndTheNodeGoesOn) {
       {"non-finite", [nan](Scene* s) { s->contacts.contacts[0].d_free[1] = nan; }},
       {"compliance has rows", [](Scene* s) { s->compliance.rows = 4; }},
       {"negative mu", [](Scene* s) { s->contacts.contacts[1].mu = -2.0; }},
-      {"zero normal", [](Scene* s) { s->contacts.contacts[0].normal = lcp_contact_solver_test::vec(0, 0, 0); }},
+      {"zero normal",
+       [](Scene* s) { s->contacts.contacts[0].normal = lcp_contact_solver_test::vec(0, 0, 0); }},
       {"empty", [](Scene* s) { s->contacts.contacts.clear(); }},
   };
   std::vector<ros::Time> rejected;
@@ -490,7 +497,8 @@ TEST_F(ContactSolverNodeTest, DiagnosticsReportRejectedInput) {
       "/diagnostics", 10, [&solver_statuses](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
         for (const auto& status : array->status) {
           const std::string suffix = ": solver";
-          if (status.name.size() > suffix.size() && status.name.compare(status.name.size() - suffix.size(), suffix.size(), suffix) == 0)
+          if (status.name.size() > suffix.size() &&
+              status.name.compare(status.name.size() - suffix.size(), suffix.size(), suffix) == 0)
             solver_statuses.push_back(status);
         }
       });
@@ -504,11 +512,15 @@ TEST_F(ContactSolverNodeTest, DiagnosticsReportRejectedInput) {
       if (kv.key == key) return kv.value;
     return std::string();
   };
-  ASSERT_TRUE(waitFor([&] {
-    for (const auto& status : solver_statuses)
-      if (status.level == diagnostic_msgs::DiagnosticStatus::WARN && value(status, "rejected inputs") != "0") return true;
-    return false;
-  }, 4.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        for (const auto& status : solver_statuses)
+          if (status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+              value(status, "rejected inputs") != "0")
+            return true;
+        return false;
+      },
+      4.0));
   EXPECT_NE(value(solver_statuses.back(), "last residual"), "");
   EXPECT_NE(value(solver_statuses.back(), "non-converged solves"), "");
 }
@@ -523,7 +535,8 @@ TEST_F(ContactSolverNodeTest, MarkersOnlyWhenSubscribed) {
   reconfigure(change);
   std::vector<visualization_msgs::MarkerArray> received;
   ros::Subscriber sub = nh_.subscribe<visualization_msgs::MarkerArray>(
-      kSolver + "/markers", 10, [&received](const visualization_msgs::MarkerArray::ConstPtr& m) { received.push_back(*m); });
+      kSolver + "/markers", 10,
+      [&received](const visualization_msgs::MarkerArray::ConstPtr& m) { received.push_back(*m); });
   // The node sees the subscriber once the connection is made; solve until it does.
   bool published = false;
   ros::Time stamp;
@@ -542,9 +555,10 @@ TEST_F(ContactSolverNodeTest, MarkersOnlyWhenSubscribed) {
   }));
   std::set<std::string> namespaces;
   for (const auto& m : received.back().markers) namespaces.insert(m.ns);
-  for (const char* ns : {lcp_contact_solver_ros::kNsContactPoints, lcp_contact_solver_ros::kNsNormals,
-                         lcp_contact_solver_ros::kNsForces, lcp_contact_solver_ros::kNsFrictionCones,
-                         lcp_contact_solver_ros::kNsComplianceHeatmap, lcp_contact_solver_ros::kNsLambdaHeatmap})
+  for (const char* ns :
+       {lcp_contact_solver_ros::kNsContactPoints, lcp_contact_solver_ros::kNsNormals,
+        lcp_contact_solver_ros::kNsForces, lcp_contact_solver_ros::kNsFrictionCones,
+        lcp_contact_solver_ros::kNsComplianceHeatmap, lcp_contact_solver_ros::kNsLambdaHeatmap})
     EXPECT_EQ(namespaces.count(ns), 1u) << ns;
 
   sub.shutdown();

@@ -29,9 +29,9 @@
 namespace {
 
 namespace lcs = lcp_contact_solver;
-using lcs::SolverStats;
-using lcp_contact_solver_test::Scene;
 using lcp_contact_solver_test::makeScene;
+using lcp_contact_solver_test::Scene;
+using lcs::SolverStats;
 
 bool waitFor(const std::function<bool()>& done, double timeout) {
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout);
@@ -69,10 +69,11 @@ struct Event {
 class Faults : public testing::Test {
  protected:
   void SetUp() override {
-    contacts_sub_ = nh_.subscribe<lcs::ContactArray>("/contacts", 10000, [this](const lcs::ContactArray::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      events_.push_back({Event::kContacts, m->header.stamp, m->contacts.size(), ros::WallTime::now()});
-    });
+    contacts_sub_ =
+        nh_.subscribe<lcs::ContactArray>("/contacts", 10000, [this](const lcs::ContactArray::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          events_.push_back({Event::kContacts, m->header.stamp, m->contacts.size(), ros::WallTime::now()});
+        });
     forces_sub_ = nh_.subscribe<lcs::ConstraintForces>(
         "/constraint_forces", 10000, [this](const lcs::ConstraintForces::ConstPtr& m) {
           std::lock_guard<std::mutex> lock(mutex_);
@@ -82,11 +83,13 @@ class Faults : public testing::Test {
         });
     // The simulator waits for two subscribers (solver and test) on contacts and compliance.
     compliance_sub_ = nh_.subscribe<lcs::Compliance>(
-        "/compliance", 10, boost::function<void(const lcs::Compliance::ConstPtr&)>([](const lcs::Compliance::ConstPtr&) {}));
-    stats_sub_ = nh_.subscribe<SolverStats>("/contact_solver/stats", 10000, [this](const SolverStats::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stats_[m->header.stamp].push_back(*m);
-    });
+        "/compliance", 10,
+        boost::function<void(const lcs::Compliance::ConstPtr&)>([](const lcs::Compliance::ConstPtr&) {}));
+    stats_sub_ =
+        nh_.subscribe<SolverStats>("/contact_solver/stats", 10000, [this](const SolverStats::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          stats_[m->header.stamp].push_back(*m);
+        });
     diag_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
         "/diagnostics", 1000, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
           std::lock_guard<std::mutex> lock(mutex_);
@@ -147,10 +150,12 @@ std::vector<SimRun> splitRuns(const std::vector<Event>& events) {
 // after this test was connected gets exactly its forces, and no forces of an older run's
 // stamps arrive during a newer run (no stale forces).
 TEST_F(Faults, ARestartedSimulatorGetsTheForcesOfAllItsSteps) {
-  ASSERT_TRUE(waitFor([&] { return forces_sub_.getNumPublishers() > 0 && contacts_sub_.getNumPublishers() > 0; }, 30));
+  ASSERT_TRUE(waitFor(
+      [&] { return forces_sub_.getNumPublishers() > 0 && contacts_sub_.getNumPublishers() > 0; }, 30));
   // Three complete runs after the first one seen (that one may have begun before we were
   // connected), i.e. at least two restarts.
-  ASSERT_TRUE(waitFor([&] { return splitRuns(events()).size() >= 5; }, 120)) << splitRuns(events()).size() << " runs";
+  ASSERT_TRUE(waitFor([&] { return splitRuns(events()).size() >= 5; }, 120))
+      << splitRuns(events()).size() << " runs";
   const std::vector<SimRun> runs = splitRuns(events());
   for (std::size_t r = 1; r + 1 < runs.size(); ++r) {  // the last one may be under way
     const SimRun& run = runs[r];
@@ -158,7 +163,8 @@ TEST_F(Faults, ARestartedSimulatorGetsTheForcesOfAllItsSteps) {
     for (const Event& f : run.forces) {
       // A stale force would carry a stamp this run has not sent (yet) or the wrong size.
       auto it = run.contacts.find(f.stamp);
-      ASSERT_NE(it, run.contacts.end()) << "run " << r << ": forces stamped " << f.stamp << " not of this run";
+      ASSERT_NE(it, run.contacts.end())
+          << "run " << r << ": forces stamped " << f.stamp << " not of this run";
       EXPECT_EQ(f.contacts, it->second) << "run " << r << " stamp " << f.stamp;
       ++got[f.stamp];
     }
@@ -166,7 +172,8 @@ TEST_F(Faults, ARestartedSimulatorGetsTheForcesOfAllItsSteps) {
     for (const auto& c : run.contacts) {
       if (c.second == 0) continue;
       ++with_contacts;
-      EXPECT_EQ(got[c.first], 1) << "run " << r << ": step at " << c.first << " got " << got[c.first] << " forces";
+      EXPECT_EQ(got[c.first], 1) << "run " << r << ": step at " << c.first << " got " << got[c.first]
+                                 << " forces";
     }
     EXPECT_GT(with_contacts, 10) << "run " << r;
   }
@@ -195,8 +202,14 @@ int pidOf(const std::string& node) {
 // it. The simulator neither stops nor stalls (its wait per step is bounded), counts the steps
 // without forces on its diagnostics, and gets forces again from the new node.
 TEST_F(Faults, TheSimulatorSurvivesTheSolverNodeRestarting) {
-  ASSERT_TRUE(waitFor([&] { return forces_sub_.getNumPublishers() > 0 && contacts_sub_.getNumPublishers() > 0; }, 30));
-  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(mutex_); return forces_.size() >= 50; }, 30));
+  ASSERT_TRUE(waitFor(
+      [&] { return forces_sub_.getNumPublishers() > 0 && contacts_sub_.getNumPublishers() > 0; }, 30));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> l(mutex_);
+        return forces_.size() >= 50;
+      },
+      30));
   const int pid = pidOf("/contact_solver");
   ASSERT_GT(pid, 0);
   const ros::WallTime killed = ros::WallTime::now();
@@ -208,7 +221,8 @@ TEST_F(Faults, TheSimulatorSurvivesTheSolverNodeRestarting) {
       if (e.kind == Event::kForces && e.arrival > killed + ros::WallDuration(0.2)) ++n;
     return n;
   };
-  ASSERT_TRUE(waitFor([&] { return forcesSinceKill() >= 50; }, 60)) << forcesSinceKill() << " forces since the kill";
+  ASSERT_TRUE(waitFor([&] { return forcesSinceKill() >= 50; }, 60))
+      << forcesSinceKill() << " forces since the kill";
   const int new_pid = pidOf("/contact_solver");
   EXPECT_GT(new_pid, 0);
   EXPECT_NE(new_pid, pid);
@@ -234,10 +248,13 @@ TEST_F(Faults, TheSimulatorSurvivesTheSolverNodeRestarting) {
 
   // Its own count of the misses (diagnostics): at least the steps we saw without forces
   // after the kill, bounded by every step.
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> l(mutex_);
-    return simulator_diag_.count("force timeouts") && std::stoi(simulator_diag_["force timeouts"]) > 0;
-  }, 20)) << "the simulator's diagnostics never counted a force timeout";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> l(mutex_);
+        return simulator_diag_.count("force timeouts") && std::stoi(simulator_diag_["force timeouts"]) > 0;
+      },
+      20))
+      << "the simulator's diagnostics never counted a force timeout";
   std::lock_guard<std::mutex> lock(mutex_);
   for (const auto& entry : forces_by_stamp) EXPECT_EQ(entry.second, 1) << "forces at " << entry.first;
   EXPECT_EQ(non_finite_, 0);
@@ -253,10 +270,12 @@ class Inputs : public Faults {
     compliance_pub_ = nh_.advertise<lcs::Compliance>("/compliance", 1000);
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
     // Two subscribers each: the node and this test's own recorder.
-    ASSERT_TRUE(waitFor([&] {
-      return contacts_pub_.getNumSubscribers() >= 2 && compliance_pub_.getNumSubscribers() >= 2 &&
-             stats_sub_.getNumPublishers() > 0 && forces_sub_.getNumPublishers() > 0;
-    }, 30));
+    ASSERT_TRUE(waitFor(
+        [&] {
+          return contacts_pub_.getNumSubscribers() >= 2 && compliance_pub_.getNumSubscribers() >= 2 &&
+                 stats_sub_.getNumPublishers() > 0 && forces_sub_.getNumPublishers() > 0;
+        },
+        30));
   }
   void clock(double t) {
     rosgraph_msgs::Clock c;
@@ -350,7 +369,8 @@ TEST_F(Inputs, AClockThatStopsAndResumesDoesNotMisreportPairs) {
   contacts_pub_.publish(sceneAt(lonely.toSec()).contacts);
   // pairing_window is 1 s in the launch file: reported within a few s although no
   // simulated time passes.
-  ASSERT_TRUE(waitFor([&] { return !statsAt(lonely).empty(); }, 5)) << "unreported while the clock stood still";
+  ASSERT_TRUE(waitFor([&] { return !statsAt(lonely).empty(); }, 5))
+      << "unreported while the clock stood still";
   EXPECT_EQ(statsAt(lonely)[0].status_code, SolverStats::NO_COMPLIANCE);
 
   // Clock resumes and races: 100 s per message, every 10 ms wall.

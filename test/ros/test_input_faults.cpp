@@ -14,16 +14,17 @@
 namespace {
 
 using lcp_contact_solver::SolverStats;
-using lcp_contact_solver_test::Scene;
 using lcp_contact_solver_test::makeScene;
+using lcp_contact_solver_test::Scene;
 
 class InputFaults : public testing::Test {
  protected:
   void SetUp() override {
-    stats_sub_ = nh_.subscribe<SolverStats>("/contact_solver/stats", 100000, [this](const SolverStats::ConstPtr& s) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      outcomes_[s->header.stamp].push_back(s->status_code);
-    });
+    stats_sub_ =
+        nh_.subscribe<SolverStats>("/contact_solver/stats", 100000, [this](const SolverStats::ConstPtr& s) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          outcomes_[s->header.stamp].push_back(s->status_code);
+        });
     contacts_pub_ = nh_.advertise<lcp_contact_solver::ContactArray>("/contacts", 100000);
     compliance_pub_ = nh_.advertise<lcp_contact_solver::Compliance>("/compliance", 100000);
     const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);

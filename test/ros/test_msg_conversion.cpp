@@ -3,18 +3,18 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include "lcp_contact_solver/ros/node/cycle_log.h"
 #include "lcp_contact_solver/ros/node/cycle_solver.h"
-#include "lcp_contact_solver/ros/node/markers.h"
-#include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 #include "lcp_contact_solver/ros/node/input_queue.h"
-#include "lcp_contact_solver/ros/node/solver_params_ros.h"
+#include "lcp_contact_solver/ros/node/markers.h"
 #include "lcp_contact_solver/ros/node/solve_rate_status.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
+#include <gtest/gtest.h>
 #include <Eigen/Geometry>
 #include <boost/make_shared.hpp>
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
@@ -51,8 +51,9 @@ const ros::Time kStamp(100, 0);
 // ---- tangents -------------------------------------------------------------------------
 
 TEST(DeriveTangents, RightHandedOrthonormalAndDeterministic) {
-  for (const Eigen::Vector3d& raw : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, -1, 0),
-                                      Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-0.3, 0.2, 0.9)}) {
+  for (const Eigen::Vector3d& raw :
+       {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, -1, 0),
+        Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-0.3, 0.2, 0.9)}) {
     const Eigen::Vector3d n = raw.normalized();
     Eigen::Vector3d t1, t2, again1, again2;
     deriveTangents(n, &t1, &t2);
@@ -134,7 +135,8 @@ TEST(ToProblem, BlockSparseInAnyBlockOrderIsTheSameMatrix) {
   for (std::size_t k = W.block_rows.size(); k-- > 0;) {
     reversed.compliance.block_rows.push_back(W.block_rows[k]);
     reversed.compliance.block_cols.push_back(W.block_cols[k]);
-    reversed.compliance.block_data.insert(reversed.compliance.block_data.end(), W.block_data.begin() + start[k],
+    reversed.compliance.block_data.insert(reversed.compliance.block_data.end(),
+                                          W.block_data.begin() + start[k],
                                           W.block_data.begin() + start[k + 1]);
   }
   ASSERT_GT(W.block_rows.size(), 2u);
@@ -152,7 +154,8 @@ TEST(ToProblem, BlockSparseInAnyBlockOrderIsTheSameMatrix) {
     Scene twice = *s;
     twice.compliance.block_rows.push_back(twice.compliance.block_rows.back());
     twice.compliance.block_cols.push_back(twice.compliance.block_cols.back());
-    const std::size_t n = sizes[twice.compliance.block_rows.back()] * sizes[twice.compliance.block_cols.back()];
+    const std::size_t n =
+        sizes[twice.compliance.block_rows.back()] * sizes[twice.compliance.block_cols.back()];
     twice.compliance.block_data.insert(twice.compliance.block_data.end(), n, 0.5);
     EXPECT_NE(convert(twice).error.find("is given twice"), std::string::npos) << convert(twice).error;
   }
@@ -195,7 +198,8 @@ TEST(ToProblem, BlockSparseWithMissingBlocksIsZeroThere) {
   scene.compliance = diagonal;
   const Converted c = convert(scene);
   ASSERT_EQ(c.error, "");
-  const Eigen::MatrixXd W = lcs::core::toDense(c.problem.W), full = lcp_contact_solver_test::coupledCompliance(9);
+  const Eigen::MatrixXd W = lcs::core::toDense(c.problem.W),
+                        full = lcp_contact_solver_test::coupledCompliance(9);
   EXPECT_EQ(W(0, 3), 0.0);
   EXPECT_EQ(W(6, 6), full(6, 6));
   EXPECT_EQ(W.block(7, 7, 2, 2), full.block(7, 7, 2, 2));
@@ -223,29 +227,47 @@ INSTANTIATE_TEST_SUITE_P(
     Faults, ToProblemRejects,
     ::testing::Values(
         BadCase{"empty", [](Scene* s) { s->contacts.contacts.clear(); }, "empty"},
-        BadCase{"nan_dfree", [](Scene* s) { s->contacts.contacts[1].d_free[0] = kNaN; }, "d_free holds a non-finite"},
-        BadCase{"inf_position", [](Scene* s) { s->contacts.contacts[0].position.y = kInf; }, "contact 0 (id 10) has a non-finite position"},
-        BadCase{"nan_normal", [](Scene* s) { s->contacts.contacts[2].normal.x = kNaN; }, "non-finite direction"},
-        BadCase{"zero_normal", [](Scene* s) { s->contacts.contacts[2].normal = lcp_contact_solver_test::vec(0, 0, 0); }, "contact 2 (id 12) has a zero normal"},
+        BadCase{"nan_dfree", [](Scene* s) { s->contacts.contacts[1].d_free[0] = kNaN; },
+                "d_free holds a non-finite"},
+        BadCase{"inf_position", [](Scene* s) { s->contacts.contacts[0].position.y = kInf; },
+                "contact 0 (id 10) has a non-finite position"},
+        BadCase{"nan_normal", [](Scene* s) { s->contacts.contacts[2].normal.x = kNaN; },
+                "non-finite direction"},
+        BadCase{"zero_normal",
+                [](Scene* s) { s->contacts.contacts[2].normal = lcp_contact_solver_test::vec(0, 0, 0); },
+                "contact 2 (id 12) has a zero normal"},
         BadCase{"negative_mu", [](Scene* s) { s->contacts.contacts[1].mu = -0.5; }, "negative mu"},
         BadCase{"nan_mu", [](Scene* s) { s->contacts.contacts[1].mu = kNaN; }, "non-finite mu"},
-        BadCase{"dfree_size", [](Scene* s) { s->contacts.contacts[0].d_free.pop_back(); }, "2 d_free values for 3 rows"},
-        BadCase{"rows_field", [](Scene* s) { s->contacts.contacts[2].rows = 3; }, "rows=3 but its type has 1"},
-        BadCase{"bilateral_rows", [](Scene* s) { s->contacts.contacts[3].rows = 0; }, "bilateral with rows=0"},
+        BadCase{"dfree_size", [](Scene* s) { s->contacts.contacts[0].d_free.pop_back(); },
+                "2 d_free values for 3 rows"},
+        BadCase{"rows_field", [](Scene* s) { s->contacts.contacts[2].rows = 3; },
+                "rows=3 but its type has 1"},
+        BadCase{"bilateral_rows", [](Scene* s) { s->contacts.contacts[3].rows = 0; },
+                "bilateral with rows=0"},
         BadCase{"unknown_type", [](Scene* s) { s->contacts.contacts[0].type = 7; }, "unknown type 7"},
-        BadCase{"duplicate_id", [](Scene* s) { s->contacts.contacts[3].id = 10; }, "contact 3 (id 10) repeats an id"},
-        BadCase{"one_tangent", [](Scene* s) { s->contacts.contacts[1].tangent2 = lcp_contact_solver_test::vec(0, 0, 0); }, "one tangent"},
-        BadCase{"skew_tangent", [](Scene* s) { s->contacts.contacts[1].tangent1 = lcp_contact_solver_test::vec(1, 0, 1); }, "not orthogonal"},
+        BadCase{"duplicate_id", [](Scene* s) { s->contacts.contacts[3].id = 10; },
+                "contact 3 (id 10) repeats an id"},
+        BadCase{"one_tangent",
+                [](Scene* s) { s->contacts.contacts[1].tangent2 = lcp_contact_solver_test::vec(0, 0, 0); },
+                "one tangent"},
+        BadCase{"skew_tangent",
+                [](Scene* s) { s->contacts.contacts[1].tangent1 = lcp_contact_solver_test::vec(1, 0, 1); },
+                "not orthogonal"},
         BadCase{"compliance_rows", [](Scene* s) { s->compliance.rows = 8; }, "rows=8, the contacts have 9"},
         BadCase{"dense_size", [](Scene* s) { s->compliance.data.pop_back(); }, "80 values, 9x9 expected"},
         BadCase{"nan_w", [](Scene* s) { s->compliance.data[40] = kNaN; }, "W holds a non-finite value"},
         BadCase{"unknown_storage", [](Scene* s) { s->compliance.storage = 9; }, "unknown storage 9"},
-        BadCase{"too_many_rows", [](Scene* s) { s->contacts.contacts.resize(20000, s->contacts.contacts[0]);
-                                                for (int i = 0; i < 20000; ++i) s->contacts.contacts[i].id = i; },
+        BadCase{"too_many_rows",
+                [](Scene* s) {
+                  s->contacts.contacts.resize(20000, s->contacts.contacts[0]);
+                  for (int i = 0; i < 20000; ++i) s->contacts.contacts[i].id = i;
+                },
                 "more than the limit of 30000"},
         BadCase{"block_index", [](Scene* s) { s->compliance.block_cols[0] = 4; }, "beyond the 4 contacts"},
-        BadCase{"block_twice", [](Scene* s) { s->compliance.block_cols[1] = s->compliance.block_cols[0]; }, "is given twice"},
-        BadCase{"block_data_size", [](Scene* s) { s->compliance.block_data.push_back(1.0); }, "block_data values, its blocks need"},
+        BadCase{"block_twice", [](Scene* s) { s->compliance.block_cols[1] = s->compliance.block_cols[0]; },
+                "is given twice"},
+        BadCase{"block_data_size", [](Scene* s) { s->compliance.block_data.push_back(1.0); },
+                "block_data values, its blocks need"},
         BadCase{"block_cols_size", [](Scene* s) { s->compliance.block_cols.pop_back(); }, "block_cols"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.what); });
 
@@ -357,17 +379,28 @@ TEST(ToProblem, MalformedBodyFormsAreRefusedBeforeAllocating) {
     const char* expected;
   };
   const std::vector<Case> cases = {
-      {"compliance_size", [](lcs::Compliance* c) { c->body_compliance.pop_back(); }, "107 body_compliance values, not 36"},
-      {"contact_bodies", [](lcs::Compliance* c) { c->contact_bodies.push_back(0); }, "9 contact_bodies, 8 expected"},
-      {"body_range", [](lcs::Compliance* c) { c->contact_bodies[4] = 3; }, "contact 2 names body_a 3, outside -1..2"},
+      {"compliance_size", [](lcs::Compliance* c) { c->body_compliance.pop_back(); },
+       "107 body_compliance values, not 36"},
+      {"contact_bodies", [](lcs::Compliance* c) { c->contact_bodies.push_back(0); },
+       "9 contact_bodies, 8 expected"},
+      {"body_range", [](lcs::Compliance* c) { c->contact_bodies[4] = 3; },
+       "contact 2 names body_a 3, outside -1..2"},
       {"body_negative", [](lcs::Compliance* c) { c->contact_bodies[7] = -2; }, "contact 3 names body_b -2"},
       {"huge_body_index", [](lcs::Compliance* c) { c->contact_bodies[0] = 2147483647; }, "outside -1..2"},
-      {"jacobian_size", [](lcs::Compliance* c) { c->jacobian.pop_back(); }, "71 jacobian values, its contacts need 72"},
+      {"jacobian_size", [](lcs::Compliance* c) { c->jacobian.pop_back(); },
+       "71 jacobian values, its contacts need 72"},
       {"static_side_counts", [](lcs::Compliance* c) { c->contact_bodies[1] = 1; }, "its contacts need 90"},
-      {"diagonal_size", [](lcs::Compliance* c) { c->body_diagonal.assign(8, 0.0); }, "8 body_diagonal values, 9 rows"},
+      {"diagonal_size", [](lcs::Compliance* c) { c->body_diagonal.assign(8, 0.0); },
+       "8 body_diagonal values, 9 rows"},
       {"nan_jacobian", [](lcs::Compliance* c) { c->jacobian[20] = kNaN; }, "non-finite Jacobian"},
-      {"inf_compliance", [](lcs::Compliance* c) { c->body_compliance[40] = kInf; }, "body 1 has a non-finite compliance"},
-      {"nan_diagonal", [](lcs::Compliance* c) { c->body_diagonal.assign(9, 0.0); c->body_diagonal[3] = kNaN; }, "diagonal holds a non-finite"},
+      {"inf_compliance", [](lcs::Compliance* c) { c->body_compliance[40] = kInf; },
+       "body 1 has a non-finite compliance"},
+      {"nan_diagonal",
+       [](lcs::Compliance* c) {
+         c->body_diagonal.assign(9, 0.0);
+         c->body_diagonal[3] = kNaN;
+       },
+       "diagonal holds a non-finite"},
       {"rows", [](lcs::Compliance* c) { c->rows = 10; }, "rows=10, the contacts have 9"},
   };
   for (const Case& bad : cases) {
@@ -401,7 +434,7 @@ TEST(ToConstraintForcesMsg, ForcesFollowTheContactFrames) {
     EXPECT_NEAR((toEigen(f.force) - expected).norm(), 0.0, 1e-15);
     EXPECT_NEAR((toEigen(f.tangent1) - frame.tangent1).norm(), 0.0, 1e-15);  // derived ones published back
   }
-  EXPECT_EQ(msg.forces[2].tangent1_force, 0.0);  // frictionless
+  EXPECT_EQ(msg.forces[2].tangent1_force, 0.0);                      // frictionless
   EXPECT_EQ(msg.forces[3].tangent1_force, msg.forces[3].lambda[1]);  // bilateral second row along t1
   EXPECT_TRUE(allFinite(msg));
 }
@@ -433,12 +466,13 @@ TEST(SumBodyPairWrenches, InterleavedPairsAreSummedApart) {
     f.position.y = px;
     return f;
   };
-  const std::vector<lcs::ContactForce> forces = {force("a", "b", 1, 0), force("c", "d", 10, 1), force("a", "b", 2, 2),
-                                                 force("b", "a", 100, 0), force("c", "d", 20, 0),
-                                                 force("a", "bc", 1000, 0), force("ab", "c", 5000, 0)};
+  const std::vector<lcs::ContactForce> forces = {
+      force("a", "b", 1, 0),  force("c", "d", 10, 1),    force("a", "b", 2, 2),    force("b", "a", 100, 0),
+      force("c", "d", 20, 0), force("a", "bc", 1000, 0), force("ab", "c", 5000, 0)};
   const std::vector<lcs::BodyPairWrench> w = sumBodyPairWrenches(forces);
   ASSERT_EQ(w.size(), 5u);
-  const std::pair<std::string, std::string> names[] = {{"a", "b"}, {"c", "d"}, {"b", "a"}, {"a", "bc"}, {"ab", "c"}};
+  const std::pair<std::string, std::string> names[] = {
+      {"a", "b"}, {"c", "d"}, {"b", "a"}, {"a", "bc"}, {"ab", "c"}};
   const double sums[] = {3, 30, 100, 1000, 5000};
   for (int k = 0; k < 5; ++k) {
     EXPECT_EQ(w[k].body_a, names[k].first);
@@ -455,8 +489,8 @@ TEST(SumBodyPairWrenches, InterleavedPairsAreSummedApart) {
 TEST(ToConstraintForcesMsg, TorsionalAndRollingRowsAreATorque) {
   Scene scene;
   scene.contacts.header.stamp = kStamp;
-  lcs::ContactPoint c = lcp_contact_solver_test::contact(
-      5, "ball", "ground", lcs::ContactPoint::ROLLING, {-1.0, 0.0, 0.0, -0.05, 0.3, 0.4}, 0.5);
+  lcs::ContactPoint c = lcp_contact_solver_test::contact(5, "ball", "ground", lcs::ContactPoint::ROLLING,
+                                                         {-1.0, 0.0, 0.0, -0.05, 0.3, 0.4}, 0.5);
   c.position = lcp_contact_solver_test::point(1.0, 2.0, 0.0);
   c.normal = lcp_contact_solver_test::vec(0, 0, 1);
   c.mu_torsional = 0.02;
@@ -483,7 +517,8 @@ TEST(ToConstraintForcesMsg, TorsionalAndRollingRowsAreATorque) {
   EXPECT_NEAR((toEigen(msg.forces[0].torque) - torque).norm(), 0.0, 1e-15);
   EXPECT_NEAR(result.forces[3], 0.02, 1e-10);  // spin: 0.05 would stick, bound 0.02 · λ_n = 0.02
   ASSERT_EQ(msg.wrenches.size(), 1u);
-  const Eigen::Vector3d expected = toEigen(msg.forces[0].position).cross(toEigen(msg.forces[0].force)) + torque;
+  const Eigen::Vector3d expected =
+      toEigen(msg.forces[0].position).cross(toEigen(msg.forces[0].force)) + torque;
   EXPECT_NEAR((toEigen(msg.wrenches[0].wrench.torque) - expected).norm(), 0.0, 1e-15);
 }
 
@@ -620,7 +655,8 @@ class Markers : public ::testing::Test {
     return ns;
   }
 
-  const visualization_msgs::Marker* find(const visualization_msgs::MarkerArray& markers, const std::string& ns) const {
+  const visualization_msgs::Marker* find(const visualization_msgs::MarkerArray& markers,
+                                         const std::string& ns) const {
     for (const auto& m : markers.markers)
       if (m.ns == ns) return &m;
     return nullptr;
@@ -640,7 +676,8 @@ TEST_F(Markers, BuiltOnlyWithSubscribers) {
 TEST_F(Markers, StableNamespacesAndNoHeatmapByDefault) {
   const DisplayOptions options;  // showCellWidth 0: SOFA's default, no heat map
   const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, options);
-  EXPECT_EQ(namespaces(markers), (std::set<std::string>{kNsContactPoints, kNsNormals, kNsForces, kNsFrictionCones}));
+  EXPECT_EQ(namespaces(markers),
+            (std::set<std::string>{kNsContactPoints, kNsNormals, kNsForces, kNsFrictionCones}));
   for (const auto& m : markers.markers) {
     EXPECT_EQ(m.header.frame_id, "world");
     EXPECT_EQ(m.lifetime.toSec(), 0.5);
@@ -657,9 +694,11 @@ TEST_F(Markers, StableNamespacesAndNoHeatmapByDefault) {
 }
 
 TEST_F(Markers, ColoursTellStatesAndForcesApart) {
-  const auto markers = buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, DisplayOptions());
+  const auto markers =
+      buildMarkers(scene_.contacts.header, c_.frames, c_.problem, result_, mu_, DisplayOptions());
   std::vector<std_msgs::ColorRGBA> colours;
-  for (int s = 0; s < lcs::core::kContactStateCount; ++s) colours.push_back(stateColor(static_cast<lcs::core::ContactState>(s)));
+  for (int s = 0; s < lcs::core::kContactStateCount; ++s)
+    colours.push_back(stateColor(static_cast<lcs::core::ContactState>(s)));
   bool arrows = false;
   for (const auto& m : markers.markers) {
     if (m.ns != kNsForces) continue;
@@ -713,7 +752,7 @@ TEST(HeatColor, DivergesAroundZero) {
   EXPECT_EQ(heatColor(1.0, 1.0).b, 0.0f);  // red
   EXPECT_EQ(heatColor(-2.0, 1.0).b, 1.0f);
   EXPECT_EQ(heatColor(-2.0, 1.0).r, 0.0f);  // clamped blue
-  EXPECT_EQ(heatColor(5.0, 0.0).g, 1.0f);  // no scale: white
+  EXPECT_EQ(heatColor(5.0, 0.0).g, 1.0f);   // no scale: white
 }
 
 // ---- pairing and debug summary --------------------------------------------------------
@@ -800,7 +839,8 @@ TEST(InputQueue, QueuePolicyKeepsOrderAndDropsTheOldestPastItsCapacity) {
   std::vector<UnsolvedInput> dropped;
   InputPair pair;
   std::vector<double> solved;
-  while (queue.take(std::chrono::milliseconds(0), &pair, &dropped)) solved.push_back(pair.contacts->header.stamp.toSec());
+  while (queue.take(std::chrono::milliseconds(0), &pair, &dropped))
+    solved.push_back(pair.contacts->header.stamp.toSec());
   EXPECT_EQ(solved, (std::vector<double>{3, 4, 5}));
   ASSERT_EQ(dropped.size(), 2u);
   EXPECT_EQ(dropped[0].header.stamp, ros::Time(1));

@@ -58,7 +58,8 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
   using lcp_contact_solver::ConstraintForces;
   std::map<ros::Time, ConstraintForces::ConstPtr> ours, mujocos;
   ros::Subscriber ours_sub = nh.subscribe<ConstraintForces>(
-      "/constraint_forces", 1000, [&ours](const ConstraintForces::ConstPtr& msg) { ours[msg->header.stamp] = msg; });
+      "/constraint_forces", 1000,
+      [&ours](const ConstraintForces::ConstPtr& msg) { ours[msg->header.stamp] = msg; });
   ros::Subscriber mujoco_sub = nh.subscribe<ConstraintForces>(
       "/mujoco_bridge/reference_forces", 1000,
       [&mujocos](const ConstraintForces::ConstPtr& msg) { mujocos[msg->header.stamp] = msg; });
@@ -94,12 +95,15 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
       worst_rel = std::max(worst_rel, rel);
     }
   }
-  std::printf("%zu step reports: up to %d contacts, max residual %.2e, max relative difference to MuJoCo %.2e, "
-              "max penetration %.4f m\n",
-              reports.size(), max_contacts, worst_residual, worst_rel, deepest);
+  std::printf(
+      "%zu step reports: up to %d contacts, max residual %.2e, max relative difference to MuJoCo %.2e, "
+      "max penetration %.4f m\n",
+      reports.size(), max_contacts, worst_residual, worst_rel, deepest);
   if (max_position_diff >= 0.0) {
-    std::printf("against MuJoCo's own run: bodies up to %.2e m apart, energies up to %.2e J, contact pairs differ on "
-                "%d steps\n", worst_position, worst_energy, pair_differ_steps);
+    std::printf(
+        "against MuJoCo's own run: bodies up to %.2e m apart, energies up to %.2e J, contact pairs differ on "
+        "%d steps\n",
+        worst_position, worst_energy, pair_differ_steps);
     EXPECT_LE(pair_differ_steps, max_pair_differ_steps);
   }
   // The reference: a subscriber that joined late misses the first steps, so most, not all.
@@ -123,7 +127,9 @@ TEST(MujocoBridge, EveryStepSolvedAndMatched) {
     ++matched;
     const double rel = scale > 0.0 ? diff / scale : 0.0;
     worst_reference_rel = std::max(worst_reference_rel, rel);
-    if (max_rel_diff >= 0.0) EXPECT_LE(rel, max_rel_diff) << "stamp " << stamp;
+    if (max_rel_diff >= 0.0) {
+      EXPECT_LE(rel, max_rel_diff) << "stamp " << stamp;
+    }
   }
   EXPECT_GE(matched, mujocos.size() / 2);
   std::printf("%zu reference forces from MuJoCo, %zu matched with the node's: max relative difference %.2e\n",

@@ -17,8 +17,8 @@
 namespace {
 
 using lcp_contact_solver::SolverStats;
-using lcp_contact_solver_test::Scene;
 using lcp_contact_solver_test::makeScene;
+using lcp_contact_solver_test::Scene;
 
 std::uint64_t valueOf(const diagnostic_msgs::DiagnosticStatus& status, const std::string& key) {
   for (const auto& kv : status.values)
@@ -38,9 +38,8 @@ TEST(Overload, EveryArrayIsAccountedForAndNoneIsBlamedOnTheCompliance) {
 
   std::map<ros::Time, std::vector<std::uint8_t>> outcomes;  // per stamp, every stats status
   ros::Subscriber stats_sub = nh.subscribe<SolverStats>(
-      "/contact_solver/stats", 100000, [&outcomes](const SolverStats::ConstPtr& s) {
-        outcomes[s->header.stamp].push_back(s->status_code);
-      });
+      "/contact_solver/stats", 100000,
+      [&outcomes](const SolverStats::ConstPtr& s) { outcomes[s->header.stamp].push_back(s->status_code); });
   diagnostic_msgs::DiagnosticStatus last_solver;
   ros::Subscriber diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 100, [&last_solver](const diagnostic_msgs::DiagnosticArray::ConstPtr& array) {
@@ -77,7 +76,8 @@ TEST(Overload, EveryArrayIsAccountedForAndNoneIsBlamedOnTheCompliance) {
 
   int solved = 0, dropped = 0;
   for (const auto& entry : outcomes) {
-    ASSERT_EQ(entry.second.size(), 1u) << "stamp " << entry.first << " reported " << entry.second.size() << " times";
+    ASSERT_EQ(entry.second.size(), 1u)
+        << "stamp " << entry.first << " reported " << entry.second.size() << " times";
     const std::uint8_t code = entry.second.front();
     EXPECT_NE(code, SolverStats::NO_COMPLIANCE) << "stamp " << entry.first;
     if (code == SolverStats::DROPPED) {

@@ -3,8 +3,8 @@
 // enum names, config/default.yaml, the generated dynamic_reconfigure config (from
 // cfg/ContactSolver.cfg), the service overrides and the README's Parameters section.
 #include "lcp_contact_solver/core/solver_param_table.h"
-#include "lcp_contact_solver/ros/replay/params_file.h"
 #include "lcp_contact_solver/ros/node/solver_params_ros.h"
+#include "lcp_contact_solver/ros/replay/params_file.h"
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -29,7 +29,7 @@ using Config = lcp_contact_solver::ContactSolverConfig;
 // The node's own table (ros/node/node_param_table.def), as data for the checks below.
 struct NodeSpec {
   std::string name, type;  // type: double, int, bool, vec3, enum
-  bool in_config;           // group SOFA or NODE
+  bool in_config;          // group SOFA or NODE
   double def = 0.0, min = 0.0, max = 0.0;
   std::string def_text, doc;
   std::string value;  // NodeSettings{}'s value as text (vec3: its x)
@@ -37,7 +37,9 @@ struct NodeSpec {
 
 std::string numberText(double v) { return lcs::core::exactDoubleText(v); }
 
-std::string axisDoc(std::string doc, char axis) { return doc.replace(doc.find("AXIS"), 4, std::string(1, axis)); }
+std::string axisDoc(std::string doc, char axis) {
+  return doc.replace(doc.find("AXIS"), 4, std::string(1, axis));
+}
 
 std::vector<NodeSpec> nodeSpecs() {
   const lcp_contact_solver_ros::NodeSettings s;
@@ -48,13 +50,15 @@ std::vector<NodeSpec> nodeSpecs() {
 #define LCS_NODE_INT(name, member, d, lo, hi, group, doc) \
   specs.push_back({#name, "int", group, d, lo, hi, std::to_string(d), doc, std::to_string(s.member)});
 #define LCS_NODE_BOOL(name, member, d, group, doc) \
-  specs.push_back({#name, "bool", group, 0.0, 0.0, 0.0, d ? "true" : "false", doc, s.member ? "true" : "false"});
-#define LCS_NODE_VEC3(name, member, d, lo, hi, group, doc)                                               \
-  for (int i = 0; i < 3; ++i)                                                                           \
-    specs.push_back({std::string(#name) + "_" + "xyz"[i], "vec3", group, d, lo, hi, numberText(d),      \
+  specs.push_back(                                 \
+      {#name, "bool", group, 0.0, 0.0, 0.0, d ? "true" : "false", doc, s.member ? "true" : "false"});
+#define LCS_NODE_VEC3(name, member, d, lo, hi, group, doc)                                         \
+  for (int i = 0; i < 3; ++i)                                                                      \
+    specs.push_back({std::string(#name) + "_" + "xyz"[i], "vec3", group, d, lo, hi, numberText(d), \
                      axisDoc(doc, "xyz"[i]), numberText(s.member[i])});
 #define LCS_NODE_ENUM(name, member, d, group, doc) \
-  specs.push_back({#name, "enum", group, 0.0, 0.0, 0.0, d, doc, lcp_contact_solver_ros::overloadPolicyName(s.member)});
+  specs.push_back(                                 \
+      {#name, "enum", group, 0.0, 0.0, 0.0, d, doc, lcp_contact_solver_ros::overloadPolicyName(s.member)});
 #include "lcp_contact_solver/ros/node/node_param_table.def"
 #undef LCS_NODE_DOUBLE
 #undef LCS_NODE_INT
@@ -115,8 +119,10 @@ TEST(ParamTable, DefaultsAreSolverParamsDefaults) {
 TEST(ParamTable, EnumChoicesAreTheCoresNames) {
   EXPECT_EQ(lcs::core::findSolverParam("solver")->choices, lcs::core::solverNames());
   EXPECT_EQ(lcs::core::findSolverParam("friction_model")->choices, lcs::core::frictionModelNames());
-  EXPECT_EQ(lcs::core::findSolverParam("stopping_rule")->choices, (std::vector<std::string>{"residual", "sofa"}));
-  EXPECT_EQ(lcs::core::findSolverParam("constraint_level")->choices, (std::vector<std::string>{"position", "velocity"}));
+  EXPECT_EQ(lcs::core::findSolverParam("stopping_rule")->choices,
+            (std::vector<std::string>{"residual", "sofa"}));
+  EXPECT_EQ(lcs::core::findSolverParam("constraint_level")->choices,
+            (std::vector<std::string>{"position", "velocity"}));
   for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
     if (spec.type != lcs::core::ParamType::kEnum) continue;
     for (const std::string& choice : spec.choices) {
@@ -130,11 +136,27 @@ TEST(ParamTable, EnumChoicesAreTheCoresNames) {
 // Every parameter away from its default (EveryParameterRoundTripsThroughText checks that).
 lcs::core::SolverParams changedParams() {
   lcs::core::SolverParams p;
-  for (const char* a : {"tolerance=1e-7", "maxIt=77", "mu=0.1", "initial_guess=false", "build_lcp=false",
-                        "regularizationTerm=3e-9", "minW=1e-12", "maxF=250", "computeConstraintForces=true",
-                        "displayDebug=true", "solver=prox", "friction_model=pyramid8", "sor=1.3",
-                        "time_budget=0.25", "stopping_rule=sofa", "erp=0.2", "softness=1e-6",
-                        "constraint_level=velocity", "time_step=0.01", "max_rows=12", "islands=false",
+  for (const char* a : {"tolerance=1e-7",
+                        "maxIt=77",
+                        "mu=0.1",
+                        "initial_guess=false",
+                        "build_lcp=false",
+                        "regularizationTerm=3e-9",
+                        "minW=1e-12",
+                        "maxF=250",
+                        "computeConstraintForces=true",
+                        "displayDebug=true",
+                        "solver=prox",
+                        "friction_model=pyramid8",
+                        "sor=1.3",
+                        "time_budget=0.25",
+                        "stopping_rule=sofa",
+                        "erp=0.2",
+                        "softness=1e-6",
+                        "constraint_level=velocity",
+                        "time_step=0.01",
+                        "max_rows=12",
+                        "islands=false",
                         "threads=3"})
     EXPECT_EQ(lcs::core::applyAssignment(&p, a), "") << a;
   return p;
@@ -165,7 +187,8 @@ TEST(ParamTable, OneParserPerTypeRefusesWithTheExpectation) {
   EXPECT_EQ(lcs::core::setParam(&p, "maxIt", "5.5"), "maxIt='5.5' must be an integer");
   EXPECT_NE(lcs::core::setParam(&p, "maxIt", "99999999999"), "");
   EXPECT_EQ(lcs::core::setParam(&p, "islands", "maybe"), "islands='maybe' must be true or false");
-  EXPECT_EQ(lcs::core::setParam(&p, "solver", "fast"), "solver='fast' must be one of auto, pgs, nlgs, lemke, apgd, newton, prox");
+  EXPECT_EQ(lcs::core::setParam(&p, "solver", "fast"),
+            "solver='fast' must be one of auto, pgs, nlgs, lemke, apgd, newton, prox");
   EXPECT_EQ(lcs::core::setParam(&p, "speed", "3"), "'speed' is not a solver parameter");
   EXPECT_EQ(lcs::core::applyAssignment(&p, "tolerance"), "'tolerance' is not of the form name=value");
   EXPECT_EQ(lcs::core::applyAssignment(&p, "initial_guess=false", lcs::core::kParamOverride),
@@ -232,7 +255,8 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
       ASSERT_NE(node_spec, nullptr) << description->name << " is in no table";
       EXPECT_TRUE(node_spec->in_config) << node_spec->name;
       EXPECT_EQ(description->description, node_spec->doc) << node_spec->name;
-      EXPECT_EQ(configText(def, node_spec->name), node_spec->type == "bool" ? node_spec->def_text : numberText(node_spec->def));
+      EXPECT_EQ(configText(def, node_spec->name),
+                node_spec->type == "bool" ? node_spec->def_text : numberText(node_spec->def));
       if (node_spec->type != "bool") {
         EXPECT_EQ(configNumber(lo, node_spec->name), node_spec->min) << node_spec->name;
         EXPECT_EQ(configNumber(hi, node_spec->name), node_spec->max) << node_spec->name;
@@ -252,8 +276,10 @@ TEST(ParamTable, GeneratedReconfigureConfigIsTheTable) {
     }
   }
   for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
-    EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::core::kParamReconfigure) ? 1u : 0u) << spec.name;
-  for (const NodeSpec& spec : nodeSpecs()) EXPECT_EQ(in_config.count(spec.name), spec.in_config ? 1u : 0u) << spec.name;
+    EXPECT_EQ(in_config.count(spec.name), (spec.access & lcs::core::kParamReconfigure) ? 1u : 0u)
+        << spec.name;
+  for (const NodeSpec& spec : nodeSpecs())
+    EXPECT_EQ(in_config.count(spec.name), spec.in_config ? 1u : 0u) << spec.name;
 }
 
 TEST(ParamTable, NodeSettingsDefaultsAreTheNodeTable) {
@@ -270,8 +296,10 @@ TEST(ParamTable, ConfigRoundTripCarriesEveryReconfigurableParameter) {
   lcp_contact_solver_ros::NodeSettings t;
   ASSERT_EQ(lcp_contact_solver_ros::fromConfig(lcp_contact_solver_ros::toConfig(s), &t), "");
   for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
-    const lcs::core::SolverParams& expected = (spec.access & lcs::core::kParamReconfigure) ? s.solver : t.solver;
-    EXPECT_EQ(lcs::core::paramText(t.solver, spec.name), lcs::core::paramText(expected, spec.name)) << spec.name;
+    const lcs::core::SolverParams& expected =
+        (spec.access & lcs::core::kParamReconfigure) ? s.solver : t.solver;
+    EXPECT_EQ(lcs::core::paramText(t.solver, spec.name), lcs::core::paramText(expected, spec.name))
+        << spec.name;
   }
   EXPECT_EQ(t.solver.islands, lcp_contact_solver_ros::NodeSettings().solver.islands);  // start-up only: kept
   EXPECT_EQ(t.display.showTranslation, s.display.showTranslation);
@@ -316,9 +344,9 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
   }
   const lcs::core::SolverParams node = defaultSolverParams();
   const std::map<lcs::core::ParamType, std::string> types = {{lcs::core::ParamType::kDouble, "double"},
-                                                       {lcs::core::ParamType::kInt, "int"},
-                                                       {lcs::core::ParamType::kBool, "bool"},
-                                                       {lcs::core::ParamType::kEnum, "string"}};
+                                                             {lcs::core::ParamType::kInt, "int"},
+                                                             {lcs::core::ParamType::kBool, "bool"},
+                                                             {lcs::core::ParamType::kEnum, "string"}};
   for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) {
     ASSERT_EQ(rows.count(spec.name), 1u) << spec.name << " has no README row";
     const std::vector<std::string>& cells = rows[spec.name];
@@ -332,8 +360,8 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
       EXPECT_EQ(shown, value) << spec.name;
     }
     const std::string runtime = (spec.access & lcs::core::kParamReconfigure) ? "yes"
-                                : (spec.access & lcs::core::kParamOverride) ? "no (service: yes)"
-                                                                       : "no";
+                                : (spec.access & lcs::core::kParamOverride)  ? "no (service: yes)"
+                                                                             : "no";
     EXPECT_EQ(cells[4], runtime) << spec.name;
     for (const std::string& choice : spec.choices)
       EXPECT_NE(cells[5].find("`" + choice + "`"), std::string::npos) << spec.name << ": " << choice;
@@ -355,7 +383,8 @@ TEST(ParamTable, ReadmeParametersSectionMatchesTheTable) {
   const std::string intro = "each as\n`name=value`:";
   const std::size_t list = readme.find(intro, api);
   ASSERT_NE(list, std::string::npos);
-  const std::string text = readme.substr(list + intro.size(), readme.find("(e.g.", list) - list - intro.size());
+  const std::string text =
+      readme.substr(list + intro.size(), readme.find("(e.g.", list) - list - intro.size());
   std::set<std::string> listed;
   for (std::size_t a = text.find('`'); a != std::string::npos; a = text.find('`', text.find('`', a + 1) + 1))
     listed.insert(text.substr(a + 1, text.find('`', a + 1) - a - 1));

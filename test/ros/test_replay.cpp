@@ -9,11 +9,11 @@
 #include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/core/solver_param_table.h"
 #include "lcp_contact_solver/ros/node/cycle_solver.h"
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "lcp_contact_solver/ros/replay/answer_check.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "replay/replay_command.h"
-#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "test_scene.h"
 
 #include <gtest/gtest.h>
@@ -65,12 +65,12 @@ const ::testing::Environment* const kRemoveTmpDir = ::testing::AddGlobalTestEnvi
 // How a synthetic recording is written.
 struct Recording {
   int cycles = 12;
-  std::string prefix = "/";             // topic namespace
-  bool compliance_first_odd = true;     // odd cycles: compliance recorded before contacts
-  int unpaired_cycle = -1;              // this cycle's compliance is missing
-  double force_scale = 1.0;             // recorded forces = solved forces × this (perturbation)
-  bool with_outputs = true;             // record forces and stats
-  double reference_scale = 0.0;         // > 0: "reference_forces" = solved forces × this (from outside)
+  std::string prefix = "/";          // topic namespace
+  bool compliance_first_odd = true;  // odd cycles: compliance recorded before contacts
+  int unpaired_cycle = -1;           // this cycle's compliance is missing
+  double force_scale = 1.0;          // recorded forces = solved forces × this (perturbation)
+  bool with_outputs = true;          // record forces and stats
+  double reference_scale = 0.0;      // > 0: "reference_forces" = solved forces × this (from outside)
   bool block_sparse = false;
   lcs::core::SolverParams params = defaultSolverParams();
 };
@@ -122,7 +122,8 @@ void writeRecording(const std::string& path, const Recording& rec) {
   bag.close();
 }
 
-ReplayResult replayFile(const std::string& path, const lcs::core::SolverParams& params = defaultSolverParams(),
+ReplayResult replayFile(const std::string& path,
+                        const lcs::core::SolverParams& params = defaultSolverParams(),
                         ReplayOptions options = ReplayOptions()) {
   options.bag = path;
   options.keep_cycles = true;
@@ -388,8 +389,8 @@ TEST(Replay, WritesOutputBagCsvAndParameters) {
   writeRecording(bag, Recording());
   const std::string out_bag = tmpFile("outputs_out.bag"), csv = tmpFile("outputs.csv");
   std::string out, err;
-  ASSERT_EQ(runCommand({bag, "--no-params-file", "--out", out_bag, "--csv", csv, "maxIt=3", "--no-progress"}, &out,
-                       &err),
+  ASSERT_EQ(runCommand({bag, "--no-params-file", "--out", out_bag, "--csv", csv, "maxIt=3", "--no-progress"},
+                       &out, &err),
             0)
       << out << err;
   // Forces and stats under the recorded names with the contacts' stamps; inputs copied.
@@ -457,8 +458,8 @@ TEST(ReplayParams, ShippedDefaultsFileIsTheNodeDefaults) {
 TEST(ReplayParams, RoundTripOverridesAndFaults) {
   lcs::core::SolverParams p = defaultSolverParams();
   for (const char* o : {"tolerance=1e-7", "maxIt=77", "mu=0.25", "initial_guess=false", "solver=apgd",
-                        "stopping_rule=sofa", "sor=1.2", "regularizationTerm=1e-9", "max_rows=500",
-                        "erp=0.3", "constraint_level=velocity", "time_step=0.01", "islands=false", "threads=2"})
+                        "stopping_rule=sofa", "sor=1.2", "regularizationTerm=1e-9", "max_rows=500", "erp=0.3",
+                        "constraint_level=velocity", "time_step=0.01", "islands=false", "threads=2"})
     ASSERT_EQ(applyReplayOverride(o, &p), "") << o;
   const std::string path = tmpFile("round.params.yaml");
   ASSERT_EQ(writeParamsFile(path, p), "");
@@ -508,7 +509,8 @@ TEST(Replay, MalformedOrMissingBagsGiveOneLineErrors) {
   }
   const std::string empty = tmpFile("empty.bag");
   std::ofstream(empty).close();
-  for (const std::string& path : {garbage, truncated, empty, tmpFile("does_not_exist.bag"), tmpDir().string()}) {
+  for (const std::string& path :
+       {garbage, truncated, empty, tmpFile("does_not_exist.bag"), tmpDir().string()}) {
     const ReplayResult r = replayFile(path);
     EXPECT_NE(r.error, "") << path;
     EXPECT_EQ(r.error.find('\n'), std::string::npos) << r.error;
@@ -570,17 +572,20 @@ TEST(ReferenceTopic, ComparedWithTheReferenceNotTheRecording) {
 
   // The command judges the reference when given one, not the (reproduced) recording.
   std::string out;
-  EXPECT_EQ(runCommand({bag, "--reference-topic", "/reference_forces", "--tolerance-compare", "1e-2", "--per-cycle",
-                        "--no-progress"},
+  EXPECT_EQ(runCommand({bag, "--reference-topic", "/reference_forces", "--tolerance-compare", "1e-2",
+                        "--per-cycle", "--no-progress"},
                        &out),
             0)
       << out;
   EXPECT_NE(out.find("forces vs reference /reference_forces: 12 cycles compared"), std::string::npos) << out;
-  EXPECT_NE(out.find("OK: forces match the reference /reference_forces within 0.01"), std::string::npos) << out;
+  EXPECT_NE(out.find("OK: forces match the reference /reference_forces within 0.01"), std::string::npos)
+      << out;
   EXPECT_NE(out.find("\n11 100.110000000 4 "), std::string::npos) << out;  // --per-cycle: the last cycle
-  EXPECT_EQ(runCommand({bag, "--reference-topic", "/reference_forces", "--tolerance-compare", "1e-4"}, &out), 1);
-  EXPECT_NE(out.find("FAIL: forces differ from the reference /reference_forces: max relative 0.000999 > 0.0001"),
-            std::string::npos)
+  EXPECT_EQ(runCommand({bag, "--reference-topic", "/reference_forces", "--tolerance-compare", "1e-4"}, &out),
+            1);
+  EXPECT_NE(
+      out.find("FAIL: forces differ from the reference /reference_forces: max relative 0.000999 > 0.0001"),
+      std::string::npos)
       << out;
   EXPECT_EQ(runCommand({bag, "--tolerance-compare", "1e-4"}, &out), 0) << out;  // without it: the recording
 }
@@ -607,7 +612,8 @@ TEST(ReferenceTopic, NeverTakenAsTheRecordedOutputAndMustExist) {
   options.forces_topic.clear();
   options.reference_topic = "/mujoco_bridge/reference_forces";
   r = replayFile(bag, defaultSolverParams(), options);
-  EXPECT_NE(r.error.find("no topic /mujoco_bridge/reference_forces in the bag"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("no topic /mujoco_bridge/reference_forces in the bag"), std::string::npos)
+      << r.error;
   EXPECT_EQ(runCommand({bag, "--reference-topic", "/contacts"}), 2);  // not ConstraintForces
 
   // A reference for a cycle the replay cannot compare: not within any tolerance.
@@ -629,7 +635,8 @@ TEST(ReferenceTopic, NeverTakenAsTheRecordedOutputAndMustExist) {
 // The index of the first contact of `type` with a positive normal force.
 int pressedContact(const CycleOutput& out, lcs::core::ContactType type) {
   for (std::size_t i = 0; i < out.problem.contacts.size(); ++i)
-    if (out.problem.contacts[i].type == type && out.forces.forces[i].lambda[0] > 1e-6) return static_cast<int>(i);
+    if (out.problem.contacts[i].type == type && out.forces.forces[i].lambda[0] > 1e-6)
+      return static_cast<int>(i);
   return -1;
 }
 
@@ -643,7 +650,8 @@ TEST(AnswerCheck, TheSolvedAnswerPassesEveryCorruptionFails) {
   ASSERT_TRUE(out.result.converged);
   const AnswerCheck good = checkAnswer(out.problem, params, out.forces);
   EXPECT_TRUE(good.invariantsHold()) << good.unfit << good.first_violation;
-  EXPECT_TRUE(residualsAgree(good.residual, out.stats.residual)) << good.residual << " " << out.stats.residual;
+  EXPECT_TRUE(residualsAgree(good.residual, out.stats.residual))
+      << good.residual << " " << out.stats.residual;
   EXPECT_LE(good.residual, params.tolerance);
   AnswerChecks all;
   EXPECT_TRUE(all.add(good, &out.stats, params, ros::Time(5.0)));
@@ -724,7 +732,8 @@ TEST(AnswerCheck, ReplayFlagsARecordingWhoseForcesWereCorrupted) {
       EXPECT_TRUE(r.answers.passed()) << r.answers.first_failure;
       EXPECT_LE(r.answers.max_residual, params.tolerance);
       std::string out;
-      EXPECT_EQ(runCommand({bag, "tolerance=1e-10", "--tolerance-compare", "0"}, &out), 0) << out;  // no params file: no answer check
+      EXPECT_EQ(runCommand({bag, "tolerance=1e-10", "--tolerance-compare", "0"}, &out), 0)
+          << out;  // no params file: no answer check
     } else {
       EXPECT_FALSE(r.answers.passed());
       EXPECT_EQ(r.answers.residual_differs, 12u);
@@ -748,7 +757,8 @@ bool isMujocoReference(const fs::path& bag) { return bag.filename().string().rfi
 std::vector<fs::path> shippedBags(bool mujoco) {
   std::vector<fs::path> bags;
   for (const auto& entry : fs::directory_iterator(LCS_TEST_DATA_DIR))
-    if (entry.path().extension() == ".bag" && isMujocoReference(entry.path()) == mujoco) bags.push_back(entry.path());
+    if (entry.path().extension() == ".bag" && isMujocoReference(entry.path()) == mujoco)
+      bags.push_back(entry.path());
   std::sort(bags.begin(), bags.end());
   return bags;
 }
@@ -775,7 +785,8 @@ constexpr double kMujocoTolerance = 1e-8;
 // replayed through the node's CycleSolver with their parameters match MuJoCo's forces.
 TEST(ShippedBags, MujocoReferenceReplayMatchesMujocosForces) {
   const std::vector<fs::path> bags = shippedBags(true);
-  ASSERT_GE(bags.size(), 2u) << "no MuJoCo reference bags in " << LCS_TEST_DATA_DIR << " (scripts/record-mujoco-bags)";
+  ASSERT_GE(bags.size(), 2u) << "no MuJoCo reference bags in " << LCS_TEST_DATA_DIR
+                             << " (scripts/record-mujoco-bags)";
   std::size_t most_contacts = 0;
   for (const fs::path& bag : bags) {
     SCOPED_TRACE(bag.string());
@@ -866,7 +877,8 @@ TEST(ShippedBags, EveryRecordedAnswerSolvesItsOwnProblem) {
     EXPECT_EQ(a.without_stats, 0u);
     EXPECT_TRUE(a.passed()) << a.first_failure;
     EXPECT_LE(a.max_residual, params.tolerance);
-    std::printf("%s: %zu recorded answers, recomputed residual <= %.2e (tolerance %.0e), %.1e from the recorded\n",
-                bag.filename().c_str(), a.checked, a.max_residual, params.tolerance, a.max_residual_difference);
+    std::printf(
+        "%s: %zu recorded answers, recomputed residual <= %.2e (tolerance %.0e), %.1e from the recorded\n",
+        bag.filename().c_str(), a.checked, a.max_residual, params.tolerance, a.max_residual_difference);
   }
 }

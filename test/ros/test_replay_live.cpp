@@ -4,10 +4,10 @@
 // (replay.h) with the same parameters: forces within 1e-9 relative, same iteration counts,
 // same status, same order of cycles (the warm start carries across cycles by contact id,
 // so the order matters).
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "lcp_contact_solver/ros/replay/bag_replay.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "replay/summary.h"
-#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 
 #include <gtest/gtest.h>
 #include <lcp_contact_solver/Compliance.h>
@@ -52,7 +52,8 @@ std::set<std::string> subscribersOf(const std::string& topic) {
   XmlRpc::XmlRpcValue& subscribers = payload[1];
   for (int i = 0; i < subscribers.size(); ++i) {
     if (static_cast<std::string>(subscribers[i][0]) != topic) continue;
-    for (int j = 0; j < subscribers[i][1].size(); ++j) nodes.insert(static_cast<std::string>(subscribers[i][1][j]));
+    for (int j = 0; j < subscribers[i][1].size(); ++j)
+      nodes.insert(static_cast<std::string>(subscribers[i][1][j]));
   }
   return nodes;
 }
@@ -89,18 +90,22 @@ TEST(ReplayLive, LiveNodeMatchesOfflineReplay) {
       offline.out_forces_topic, 1000,
       [&live_forces](const ConstraintForces::ConstPtr& msg) { live_forces[msg->header.stamp] = *msg; });
   ros::Subscriber stats_sub = nh.subscribe<SolverStats>(
-      offline.out_stats_topic, 1000, [&live_stats](const SolverStats::ConstPtr& msg) { live_stats.push_back(*msg); });
+      offline.out_stats_topic, 1000,
+      [&live_stats](const SolverStats::ConstPtr& msg) { live_stats.push_back(*msg); });
   // What the player sends (to tell a lost input from a lost output when something is missing).
   std::vector<ros::Time> played_contacts, played_compliance;
   ros::Subscriber contacts_sub = nh.subscribe<lcp_contact_solver::ContactArray>(
-      offline.contacts_topic, 1000, [&played_contacts](const lcp_contact_solver::ContactArray::ConstPtr& msg) {
+      offline.contacts_topic, 1000,
+      [&played_contacts](const lcp_contact_solver::ContactArray::ConstPtr& msg) {
         played_contacts.push_back(msg->header.stamp);
       });
   ros::Subscriber compliance_sub = nh.subscribe<lcp_contact_solver::Compliance>(
-      offline.compliance_topic, 1000, [&played_compliance](const lcp_contact_solver::Compliance::ConstPtr& msg) {
+      offline.compliance_topic, 1000,
+      [&played_compliance](const lcp_contact_solver::Compliance::ConstPtr& msg) {
         played_compliance.push_back(msg->header.stamp);
       });
-  ASSERT_TRUE(waitFor([&] { return forces_sub.getNumPublishers() > 0 && stats_sub.getNumPublishers() > 0; }, 20.0))
+  ASSERT_TRUE(
+      waitFor([&] { return forces_sub.getNumPublishers() > 0 && stats_sub.getNumPublishers() > 0; }, 20.0))
       << "the contact solver's outputs never connected";
   ASSERT_TRUE(waitFor(
       [&] {
@@ -108,7 +113,8 @@ TEST(ReplayLive, LiveNodeMatchesOfflineReplay) {
                subscribersOf(offline.compliance_topic).count(solver_node) > 0;
       },
       20.0))
-      << solver_node << " never subscribed to " << offline.contacts_topic << " and " << offline.compliance_topic;
+      << solver_node << " never subscribed to " << offline.contacts_topic << " and "
+      << offline.compliance_topic;
   const std::string pause = player + "/pause_playback";
   ASSERT_TRUE(ros::service::waitForService(pause, ros::Duration(20.0))) << pause;
   ros::WallDuration(1.0).sleep();  // the player's --wait-for-subscribers covers its own connections
@@ -129,7 +135,8 @@ TEST(ReplayLive, LiveNodeMatchesOfflineReplay) {
       if (seen.count(c.stamp) == 0) missing += " " + std::to_string(c.stamp.toSec());
     std::string statuses;
     for (const SolverStats& st : live_stats)
-      if (st.status_code != SolverStats::CONVERGED) statuses += " " + std::to_string(st.header.stamp.toSec()) + ":" + st.status;
+      if (st.status_code != SolverStats::CONVERGED)
+        statuses += " " + std::to_string(st.header.stamp.toSec()) + ":" + st.status;
     ADD_FAILURE() << "no stats for stamps" << missing << "; other statuses:" << statuses << "; this node saw "
                   << played_contacts.size() << " contact arrays and " << played_compliance.size()
                   << " compliances from the player";
@@ -159,8 +166,8 @@ TEST(ReplayLive, LiveNodeMatchesOfflineReplay) {
     ++forces_compared;
   }
   EXPECT_EQ(forces_compared, offline.with_forces);
-  std::printf("live vs offline: %zu cycles, %zu with forces, max relative force difference %.3g\n", live_stats.size(),
-              forces_compared, max_relative);
+  std::printf("live vs offline: %zu cycles, %zu with forces, max relative force difference %.3g\n",
+              live_stats.size(), forces_compared, max_relative);
 }
 
 int main(int argc, char** argv) {

@@ -69,7 +69,8 @@ inline Scene makeScene(std::int64_t first_id, const ros::Time& stamp, bool block
   s.contacts.header.stamp = stamp;
   s.contacts.header.frame_id = "world";
   s.contacts.contacts = {
-      contact(first_id, "box", "ground", ContactPoint::FRICTIONAL, {-0.02, 0.01, 0.0}, ContactPoint::MU_DEFAULT),
+      contact(first_id, "box", "ground", ContactPoint::FRICTIONAL, {-0.02, 0.01, 0.0},
+              ContactPoint::MU_DEFAULT),
       contact(first_id + 1, "box", "ground", ContactPoint::FRICTIONAL, {-0.01, -0.02, 0.005}, 0.2),
       contact(first_id + 2, "ball", "box", ContactPoint::FRICTIONLESS, {-0.015}, ContactPoint::MU_DEFAULT),
       contact(first_id + 3, "arm", "box", ContactPoint::BILATERAL, {0.01, -0.01}, ContactPoint::MU_DEFAULT),
@@ -129,7 +130,8 @@ inline Scene makeBodyFormScene(std::int64_t first_id, const ros::Time& stamp) {
   for (int i = 0; i < 4; ++i)
     for (int side = 0; side < 2; ++side) {
       if (c.contact_bodies[2 * i + side] < 0) continue;
-      for (int k = 0; k < 6 * rows[i]; ++k) c.jacobian.push_back(std::cos(0.7 * value++) * (side == 0 ? 1.0 : -0.8));
+      for (int k = 0; k < 6 * rows[i]; ++k)
+        c.jacobian.push_back(std::cos(0.7 * value++) * (side == 0 ? 1.0 : -0.8));
     }
   return s;
 }

@@ -73,7 +73,8 @@ void expectRoundTrip(const std::string& name) {
   const lcs::core::SolveResult a = direct.solve(sp.problem);
   const lcs::core::SolveResult b = through.solve(back);
   ASSERT_EQ(a.forces.size(), b.forces.size());
-  EXPECT_LE((a.forces - b.forces).lpNorm<Eigen::Infinity>(), 1e-12 * (1.0 + a.forces.lpNorm<Eigen::Infinity>()));
+  EXPECT_LE((a.forces - b.forces).lpNorm<Eigen::Infinity>(),
+            1e-12 * (1.0 + a.forces.lpNorm<Eigen::Infinity>()));
 
   // Forces back by id, in any order.
   lcs::ConstraintForces msg = ros_layer::toConstraintForcesMsg(contacts, frames, back, b);

@@ -5,8 +5,8 @@
 //   - resting bodies carry their weight: net contact force = m·g within 1 %;
 //   - the trajectory through the node equals the in-process one (poses and λ within 1e-9).
 #include "lcp_contact_solver/ros/msg_conversion/scene_msg_conversion.h"
-#include "lcp_contact_solver/ros/sim/scene_simulator_node.h"
 #include "lcp_contact_solver/ros/node/solver_params_ros.h"
+#include "lcp_contact_solver/ros/sim/scene_simulator_node.h"
 #include "lcp_contact_solver/scene/scene.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
@@ -24,8 +24,8 @@
 #include <cmath>
 #include <iomanip>
 #include <map>
-#include <sstream>
 #include <memory>
+#include <sstream>
 #include <string>
 
 namespace lcs = lcp_contact_solver;
@@ -76,24 +76,29 @@ class SceneSimulatorTest : public ::testing::Test {
     Recording* rec = recording_.get();
     // tf and the forces first; contacts and compliance last: the simulator starts stepping
     // once they have this node as their second subscriber, so nothing is missed.
-    subs_.push_back(nh.subscribe<tf2_msgs::TFMessage>("/tf", 1000, [rec](const tf2_msgs::TFMessage::ConstPtr& m) {
-      for (const auto& t : m->transforms) {
-        Pose p;
-        p.position = {t.transform.translation.x, t.transform.translation.y, t.transform.translation.z};
-        p.orientation = Eigen::Quaterniond(t.transform.rotation.w, t.transform.rotation.x, t.transform.rotation.y,
-                                           t.transform.rotation.z);
-        rec->poses[t.header.stamp][t.child_frame_id] = p;
-      }
-    }));
+    subs_.push_back(
+        nh.subscribe<tf2_msgs::TFMessage>("/tf", 1000, [rec](const tf2_msgs::TFMessage::ConstPtr& m) {
+          for (const auto& t : m->transforms) {
+            Pose p;
+            p.position = {t.transform.translation.x, t.transform.translation.y, t.transform.translation.z};
+            p.orientation = Eigen::Quaterniond(t.transform.rotation.w, t.transform.rotation.x,
+                                               t.transform.rotation.y, t.transform.rotation.z);
+            rec->poses[t.header.stamp][t.child_frame_id] = p;
+          }
+        }));
     subs_.push_back(nh.subscribe<lcs::ConstraintForces>(
         "constraint_forces", 1000,
         [rec](const lcs::ConstraintForces::ConstPtr& m) { rec->forces[m->header.stamp] = *m; }));
     subs_.push_back(nh.subscribe<lcs::SolverStats>(
-        "contact_solver/stats", 1000, [rec](const lcs::SolverStats::ConstPtr& m) { rec->stats[m->header.stamp] = *m; }));
-    connected_ = waitFor([] { return subs_[0].getNumPublishers() > 0 && subs_[1].getNumPublishers() > 0; }, 30.0);
+        "contact_solver/stats", 1000,
+        [rec](const lcs::SolverStats::ConstPtr& m) { rec->stats[m->header.stamp] = *m; }));
+    connected_ =
+        waitFor([] { return subs_[0].getNumPublishers() > 0 && subs_[1].getNumPublishers() > 0; }, 30.0);
     subs_.push_back(nh.subscribe<lcs::ContactArray>(
-        "contacts", 1000, [rec](const lcs::ContactArray::ConstPtr& m) { rec->contacts[m->header.stamp] = *m; }));
-    subs_.push_back(nh.subscribe<lcs::Compliance>("compliance", 1000, [rec](const lcs::Compliance::ConstPtr&) { (void)rec; }));
+        "contacts", 1000,
+        [rec](const lcs::ContactArray::ConstPtr& m) { rec->contacts[m->header.stamp] = *m; }));
+    subs_.push_back(nh.subscribe<lcs::Compliance>("compliance", 1000,
+                                                  [rec](const lcs::Compliance::ConstPtr&) { (void)rec; }));
 
     // The run ends with the tf of the last step.
     dt_ = param<double>(kSimulator + "/dt", 0.0);
@@ -156,9 +161,11 @@ TEST_F(SceneSimulatorTest, RunCompletes) {
   ASSERT_TRUE(connected_) << "the simulator's tf or the solver's forces never connected";
   ASSERT_GT(steps_, 0);
   ASSERT_TRUE(finished_) << "no tf for the last step (" << steps_ << ") arrived; the last seen: "
-                         << (recording_->poses.empty() ? std::string("none")
-                                                       : std::to_string(recording_->poses.rbegin()->first.toSec()) + " s");
-  EXPECT_EQ(static_cast<long long>(recording_->poses.size()), steps_ + 1) << "tf stamps (initial pose + one per step)";
+                         << (recording_->poses.empty()
+                                 ? std::string("none")
+                                 : std::to_string(recording_->poses.rbegin()->first.toSec()) + " s");
+  EXPECT_EQ(static_cast<long long>(recording_->poses.size()), steps_ + 1)
+      << "tf stamps (initial pose + one per step)";
 }
 
 TEST_F(SceneSimulatorTest, ForcesArriveEveryStep) {
@@ -171,7 +178,8 @@ TEST_F(SceneSimulatorTest, ForcesArriveEveryStep) {
     ASSERT_EQ(recording_->stats.count(stamp), 1u) << "no solver stats for " << stamp;
     const lcs::SolverStats& stats = recording_->stats.at(stamp);
     EXPECT_TRUE(stats.success) << stats.status << ": " << stats.message;
-    EXPECT_TRUE(stats.converged) << "step at " << stamp << ": " << stats.status << ", residual " << stats.residual;
+    EXPECT_TRUE(stats.converged) << "step at " << stamp << ": " << stats.status << ", residual "
+                                 << stats.residual;
   }
   EXPECT_EQ(recording_->forces.size(), recording_->contacts.size()) << "forces without contacts";
 }
@@ -224,12 +232,14 @@ TEST_F(SceneSimulatorTest, ClosedLoopMatchesInProcessSimulator) {
     // Same contacts (ids, order) and the same forces by id.
     const auto contacts = recording_->contacts.find(stamp);
     if (problem.contacts.empty()) {
-      EXPECT_EQ(contacts, recording_->contacts.end()) << "step " << k << " published contacts without having any";
+      EXPECT_EQ(contacts, recording_->contacts.end())
+          << "step " << k << " published contacts without having any";
     } else {
       ASSERT_NE(contacts, recording_->contacts.end()) << "step " << k << " has contacts in-process only";
       ASSERT_EQ(contacts->second.contacts.size(), problem.contacts.size()) << "step " << k;
       for (std::size_t i = 0; i < problem.contacts.size(); ++i)
-        ASSERT_EQ(contacts->second.contacts[i].id, problem.contacts[i].id) << "step " << k << " contact " << i;
+        ASSERT_EQ(contacts->second.contacts[i].id, problem.contacts[i].id)
+            << "step " << k << " contact " << i;
       ASSERT_EQ(recording_->forces.count(stamp), 1u) << "step " << k;
       Eigen::VectorXd lambda;
       ASSERT_EQ(lcp_contact_solver_ros::toStepForces(recording_->forces.at(stamp), problem, &lambda), "");

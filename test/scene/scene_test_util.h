@@ -57,9 +57,7 @@ inline RigidBody dynamicBody(const std::string& name, const CollisionShape& shap
       d << s.y() * s.y() + s.z() * s.z(), s.x() * s.x() + s.z() * s.z(), s.x() * s.x() + s.y() * s.y();
       d *= mass / 12.0;
       break;
-    case ShapeType::kSphere:
-      d.setConstant(0.4 * mass * s.x() * s.x());
-      break;
+    case ShapeType::kSphere: d.setConstant(0.4 * mass * s.x() * s.x()); break;
     case ShapeType::kCylinder: {
       const double ixx = mass * (3 * s.x() * s.x() + s.y() * s.y()) / 12.0;
       d << ixx, ixx, 0.5 * mass * s.x() * s.x();

@@ -95,7 +95,8 @@ TEST(Compliance, SingleSphereOnGroundAnalytic) {
     ContactGenerator g(t);
     const auto f = g.generate();
     ASSERT_EQ(f.size(), 1u);
-    const Eigen::MatrixXd W = core::toDense(buildProblem(t, f, freeVelocities(t, dt), dt, ComplianceStorage::kBlockSparse).W);
+    const Eigen::MatrixXd W =
+        core::toDense(buildProblem(t, f, freeVelocities(t, dt), dt, ComplianceStorage::kBlockSparse).W);
     EXPECT_NEAR(W(0, 0), dt * dt / m, 1e-15);
     EXPECT_NEAR(W(1, 1), 3.5 * dt * dt / m, 1e-15);
     EXPECT_NEAR(W(2, 2), 3.5 * dt * dt / m, 1e-15);
@@ -135,7 +136,8 @@ TEST(Compliance, TwoDynamicBodiesShareBlocks) {
   s.bodies.push_back(ground());
   s.bodies.push_back(dynamicBody("ball", sphereShape(0.1), 1.0, Eigen::Vector3d(0, 0, 0.1)));
   s.bodies.push_back(dynamicBody("box", boxShape(0.3, 0.3, 0.1), 2.0, Eigen::Vector3d(0.02, 0.01, 0.249)));
-  s.bodies[2].orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.05, Eigen::Vector3d(1, 1, 0).normalized()));
+  s.bodies[2].orientation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.05, Eigen::Vector3d(1, 1, 0).normalized()));
   ContactGenerator gen(s);
   const auto frames = gen.generate();
   ASSERT_GE(frames.size(), 2u);

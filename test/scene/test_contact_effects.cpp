@@ -22,8 +22,8 @@ using namespace scene_test;
 namespace {
 
 constexpr double kG = 9.81;
-constexpr double kR = 0.1;    // m
-constexpr double kMass = 1.0; // kg
+constexpr double kR = 0.1;     // m
+constexpr double kMass = 1.0;  // kg
 constexpr double kInertia = 0.4 * kMass * kR * kR;
 
 Scene ballOnGround(double torsional, double rolling, double dt) {
@@ -68,7 +68,8 @@ TEST(TorsionalFriction, WithoutItASpinningBallKeepsSpinning) {
 TEST(RollingFriction, RollingBallDeceleratesByTheRollingLawAndStops) {
   const double mu_roll = 0.005, v0 = 1.0, dt = 0.005;
   SceneSimulator sim(ballOnGround(0.0, mu_roll, dt));
-  sim.setBodyVelocity(sim.scene().requireBody("ball"), Eigen::Vector3d(v0, 0, 0), Eigen::Vector3d(0, v0 / kR, 0));
+  sim.setBodyVelocity(sim.scene().requireBody("ball"), Eigen::Vector3d(v0, 0, 0),
+                      Eigen::Vector3d(0, v0 / kR, 0));
   const double a = mu_roll * kG / (kR * (1.0 + kInertia / (kMass * kR * kR)));  // 0.350 m/s²
   sim.run(1.0);
   EXPECT_EQ(sim.lastProblem().problem.contacts[0].type, core::ContactType::kRolling);
@@ -83,7 +84,8 @@ TEST(RollingFriction, RollingBallDeceleratesByTheRollingLawAndStops) {
 
 TEST(RollingFriction, WithoutItABallKeepsRolling) {
   SceneSimulator sim(ballOnGround(0.0, 0.0, 0.005));
-  sim.setBodyVelocity(sim.scene().requireBody("ball"), Eigen::Vector3d(1.0, 0, 0), Eigen::Vector3d(0, 10.0, 0));
+  sim.setBodyVelocity(sim.scene().requireBody("ball"), Eigen::Vector3d(1.0, 0, 0),
+                      Eigen::Vector3d(0, 10.0, 0));
   sim.run(1.0);
   EXPECT_NEAR(sim.body("ball").linear_velocity.x(), 1.0, 1e-6);
 }
@@ -119,8 +121,10 @@ TEST(ContactRows, EachPairPaysForTheRowsItAsksFor) {
   // Four balls on the ground, one per model: frictionless, sliding, torsional, rolling.
   Scene s;
   s.name = "condims";
-  s.params.friction_pairs = {{"b1", "ground", 0.0}, {"b3", "ground", 0.5},
-                             {"b4", "ground", 0.5, 0.01, 0.0}, {"b6", "ground", 0.5, 0.01, 0.002}};
+  s.params.friction_pairs = {{"b1", "ground", 0.0},
+                             {"b3", "ground", 0.5},
+                             {"b4", "ground", 0.5, 0.01, 0.0},
+                             {"b6", "ground", 0.5, 0.01, 0.002}};
   s.bodies.push_back(ground());
   const char* names[4] = {"b1", "b3", "b4", "b6"};
   for (int i = 0; i < 4; ++i)

@@ -35,7 +35,7 @@ TEST(Contacts, SphereOnPlaneIsExact) {
   EXPECT_NEAR(f.tangent1.dot(f.normal), 0.0, 1e-15);
   EXPECT_NEAR(f.tangent2.dot(f.normal), 0.0, 1e-15);
   EXPECT_NEAR((f.tangent1.cross(f.tangent2) - f.normal).norm(), 0.0, 1e-15);  // right-handed (t1, t2, n)
-  EXPECT_NEAR((f.tangent1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);  // n × x
+  EXPECT_NEAR((f.tangent1 - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);    // n × x
   EXPECT_EQ(f.type, core::ContactType::kFrictional);
   EXPECT_EQ(f.rows, 3);
   EXPECT_DOUBLE_EQ(f.mu, s.params.mu);

@@ -22,7 +22,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+double seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
 
 // The step's honesty: finite forces, converged ⟺ status converged ⟹ residual <= tol, and
 // otherwise a status that still gives forces (max_iterations or time_budget) — a resting
@@ -93,7 +95,8 @@ StackRun runStack(const core::SolverParams& solver, int steps) {
       ADD_FAILURE() << "non-finite energy at step " << k;
       break;
     }
-    for (int i = 0; i < kStackBoxes; ++i) run.drift = std::max(run.drift, (sim.body(i + 1).position - start[i]).norm());
+    for (int i = 0; i < kStackBoxes; ++i)
+      run.drift = std::max(run.drift, (sim.body(i + 1).position - start[i]).norm());
   }
   run.wall = seconds(t0, Clock::now());
   EXPECT_EQ(sim.lastStats().contacts, 4 * kStackBoxes);
@@ -107,10 +110,11 @@ StackRun runStack(const core::SolverParams& solver, int steps) {
 }
 
 void printRun(const char* name, const StackRun& r) {
-  std::printf("50-box stack, %s: %d steps in %.2f s (solve %.2f s), not converged %d, max iterations %d, worst "
-              "residual %.3g, max drift %.3g m, max energy gain %.3g J, ground force %.6g N (weight %.6g N)\n",
-              name, r.steps, r.wall, r.solve, r.not_converged, r.max_iterations, r.worst_residual, r.drift,
-              r.max_energy_gain, r.ground_force, kStackBoxes * 9.81);
+  std::printf(
+      "50-box stack, %s: %d steps in %.2f s (solve %.2f s), not converged %d, max iterations %d, worst "
+      "residual %.3g, max drift %.3g m, max energy gain %.3g J, ground force %.6g N (weight %.6g N)\n",
+      name, r.steps, r.wall, r.solve, r.not_converged, r.max_iterations, r.worst_residual, r.drift,
+      r.max_energy_gain, r.ground_force, kStackBoxes * 9.81);
 }
 
 // newton (the solver for rank-deficient stacks), tolerance 1e-8: converges every step;
@@ -205,7 +209,8 @@ TEST(HardScenes, FiveHundredSpherePileSettles) {
       for (int j = 0; j < 10; ++j) {
         // A small per-layer offset so the layers do not stack exactly on top of each other.
         const double shift = (k % 2) * 0.02;
-        const Eigen::Vector3d c(-0.5175 + spacing * i + shift, -0.5175 + spacing * j + shift, r + 0.01 + spacing * k);
+        const Eigen::Vector3d c(-0.5175 + spacing * i + shift, -0.5175 + spacing * j + shift,
+                                r + 0.01 + spacing * k);
         s.bodies.push_back(dynamicBody("ball_" + std::to_string(count++), sphereShape(r), mass, c));
       }
   ASSERT_EQ(count, 500);
@@ -239,11 +244,13 @@ TEST(HardScenes, FiveHundredSpherePileSettles) {
     EXPECT_LT(std::abs(b.position.y()), half) << b.name;
     EXPECT_GT(b.position.z(), r - 3e-3) << b.name;
   }
-  std::printf("500-sphere pile: %d steps in %.2f s (solve %.2f s), up to %d contacts, not converged %d, max sweeps %d, "
-              "worst residual %.3g, max penetration %.3g m, max energy gain %.3g J, final KE %.3g J of %.3g J "
-              "released\n",
-              kPileSteps, wall_time, solve_time, max_contacts, not_converged, max_iterations, worst_residual,
-              max_penetration, max_energy_gain, sim.kineticEnergy(), released);
+  std::printf(
+      "500-sphere pile: %d steps in %.2f s (solve %.2f s), up to %d contacts, not converged %d, max sweeps "
+      "%d, "
+      "worst residual %.3g, max penetration %.3g m, max energy gain %.3g J, final KE %.3g J of %.3g J "
+      "released\n",
+      kPileSteps, wall_time, solve_time, max_contacts, not_converged, max_iterations, worst_residual,
+      max_penetration, max_energy_gain, sim.kineticEnergy(), released);
   RecordProperty("wall_s", std::to_string(wall_time));
 }
 

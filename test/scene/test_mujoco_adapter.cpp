@@ -102,16 +102,19 @@ TEST(MujocoFacts, BAndARAndQaccAreWhatTheMappingAssumes) {
       auto copy = world->clone();
       forwardToConstraints(copy->model(), copy->data(), false);
       ASSERT_EQ(copy->data()->nefc, n);
-      for (int i = 0; i < n; ++i) EXPECT_NEAR(copy->data()->efc_b[i], d->efc_b[i], 1e-12 * (1 + std::abs(d->efc_b[i]))) << "row " << i;
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(copy->data()->efc_b[i], d->efc_b[i], 1e-12 * (1 + std::abs(d->efc_b[i]))) << "row " << i;
       // efc_AR with a primal solver (computed on demand) equals the one PGS builds.
       copy->model()->opt.solver = mjSOL_NEWTON;
       forwardToConstraints(copy->model(), copy->data(), true);
-      for (int i = 0; i < n * n; ++i) EXPECT_NEAR(copy->data()->efc_AR[i], d->efc_AR[i], 1e-12 * (1 + std::abs(d->efc_AR[i])));
+      for (int i = 0; i < n * n; ++i)
+        EXPECT_NEAR(copy->data()->efc_AR[i], d->efc_AR[i], 1e-12 * (1 + std::abs(d->efc_AR[i])));
       // qacc = qacc_smooth + M⁻¹ Jᵀ f.
       Eigen::VectorXd qacc = Eigen::Map<Eigen::VectorXd>(d->qacc, m->nv);
       Eigen::VectorXd f = Eigen::Map<Eigen::VectorXd>(d->efc_force, n);
       applyConstraintForces(m, d, f);
-      for (int i = 0; i < m->nv; ++i) EXPECT_NEAR(d->qacc[i], qacc[i], 1e-9 * (1 + qacc.cwiseAbs().maxCoeff()));
+      for (int i = 0; i < m->nv; ++i)
+        EXPECT_NEAR(d->qacc[i], qacc[i], 1e-9 * (1 + qacc.cwiseAbs().maxCoeff()));
       ++checked;
     }
     ASSERT_EQ(integrateEuler(m, d), "");
@@ -136,7 +139,8 @@ TEST(MujocoFacts, PyramidEdgesDecodeLikeMjContactForce) {
       ++contacts;
     }
     // Every kept row is a unilateral one-row contact (limits, frictionless, edges).
-    for (const core::Contact& contact : mp.problem.contacts) EXPECT_EQ(contact.type, core::ContactType::kFrictionless);
+    for (const core::Contact& contact : mp.problem.contacts)
+      EXPECT_EQ(contact.type, core::ContactType::kFrictionless);
   });
   EXPECT_GT(contacts, 50);
 }
@@ -170,9 +174,10 @@ TEST(MujocoCrossCheck, HumanoidPyramidalMatchesMujocoPgs) {
     worst_pgs = std::max(worst_pgs, cb.max_rel);
     worst_newton = std::max(worst_newton, cc.max_rel);
   });
-  std::printf("humanoid pyramidal: %d steps with contacts, up to %d rows; max relative difference to "
-              "efc_force: lemke %.2e, pgs %.2e, newton %.2e; MuJoCo's own residual <= %.2e\n",
-              steps, max_rows, worst_lemke, worst_pgs, worst_newton, worst_mujoco_residual);
+  std::printf(
+      "humanoid pyramidal: %d steps with contacts, up to %d rows; max relative difference to "
+      "efc_force: lemke %.2e, pgs %.2e, newton %.2e; MuJoCo's own residual <= %.2e\n",
+      steps, max_rows, worst_lemke, worst_pgs, worst_newton, worst_mujoco_residual);
   EXPECT_GT(steps, 300);
 }
 
@@ -195,9 +200,10 @@ TEST(MujocoCrossCheck, ParticlePyramidalMatchesMujocoPgs) {
     EXPECT_LE(c.max_rel, 1e-6) << "pgs, step " << s;
     worst = std::max(worst, c.max_rel);
   });
-  std::printf("particle pyramidal: %d steps with contacts, up to %d rows; max relative difference to "
-              "efc_force: pgs %.2e; MuJoCo's own residual <= %.2e\n",
-              steps, max_rows, worst, worst_mujoco_residual);
+  std::printf(
+      "particle pyramidal: %d steps with contacts, up to %d rows; max relative difference to "
+      "efc_force: pgs %.2e; MuJoCo's own residual <= %.2e\n",
+      steps, max_rows, worst, worst_mujoco_residual);
   EXPECT_GT(steps, kParticleSteps - 40);
   EXPECT_GT(max_rows, kParticleMinRows);
 }
@@ -292,8 +298,8 @@ TEST(MujocoElliptic, HumanoidDifferencesPerContactState) {
                 "humanoid elliptic (MuJoCo relaxation vs our Coulomb, max |diff| / max |f_mujoco| per step): "
                 "open %.2e (%d), stick %.2e (%d), slip %.2e (%d) contact-steps; "
                 "steps without sliding %d (max %.2e), steps with sliding %d (max %.2e)",
-                state_max[0], state_count[0], state_max[1], state_count[1], state_max[2], state_count[2], same_steps,
-                same_max, other_steps, other_max);
+                state_max[0], state_count[0], state_max[1], state_count[1], state_max[2], state_count[2],
+                same_steps, same_max, other_steps, other_max);
   std::printf("%s\n", line);
   RecordProperty("elliptic_report", line);
   EXPECT_GT(same_steps, 100);
@@ -371,9 +377,10 @@ TEST(MujocoDrive, EllipticCoulombDriveLandsAndRestsStably) {
     energy_gain = std::max(energy_gain, trace[k].energy - start.energy);
     deeper = std::max(deeper, trace[k].penetration - start.penetration);
   }
-  std::printf("elliptic drive with Coulomb forces: max penetration %.2e m over 7 s; last second: max |qvel| %.3f, "
-              "energy %.4f J -> %.4f J (max gain %.2e J), penetration change %.2e m\n",
-              max_penetration, fastest, start.energy, trace.back().energy, energy_gain, deeper);
+  std::printf(
+      "elliptic drive with Coulomb forces: max penetration %.2e m over 7 s; last second: max |qvel| %.3f, "
+      "energy %.4f J -> %.4f J (max gain %.2e J), penetration change %.2e m\n",
+      max_penetration, fastest, start.energy, trace.back().energy, energy_gain, deeper);
   EXPECT_LT(fastest, 0.1) << "the humanoid has not come to rest";
   EXPECT_LE(energy_gain, 1e-6) << "energy rose at rest";
   EXPECT_LE(deeper, 1e-4) << "penetration grew at rest";

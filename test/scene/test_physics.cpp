@@ -106,7 +106,8 @@ TEST(Physics, RestingSphereNormalForceIsMg) {
 }
 
 TEST(Physics, BoxStackRestsWithDriftUnder1mm) {
-  SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/box_stack.urdf", tight(loadSceneParams(kDir + "/box_stack.yaml"))));
+  SceneSimulator sim(
+      loadSceneFromUrdfFile(kDir + "/box_stack.urdf", tight(loadSceneParams(kDir + "/box_stack.yaml"))));
   std::vector<Eigen::Vector3d> start;
   for (int i = 1; i <= 5; ++i) start.push_back(sim.body("box_" + std::to_string(i)).position);
   double drift = 0.0;
@@ -127,7 +128,8 @@ TEST(Physics, BoxStackRestsWithDriftUnder1mm) {
 }
 
 TEST(Physics, FrictionlessSceneHasNoTangentialForce) {
-  SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/frictionless.urdf", tight(loadSceneParams(kDir + "/frictionless.yaml"))));
+  SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/frictionless.urdf",
+                                           tight(loadSceneParams(kDir + "/frictionless.yaml"))));
   const Eigen::Vector3d s = downSlope(sim);
   const double theta = std::acos((sim.body("ramp").orientation * Eigen::Vector3d::UnitZ()).z());
   int contacts = 0;
@@ -150,7 +152,8 @@ TEST(Physics, FrictionlessSceneHasNoTangentialForce) {
     for (const char* name : {"box", "ball"}) {
       const int b = sim.scene().bodyIndex(name);
       EXPECT_NEAR(w[b].head<3>().dot(s), 0.0, 1e-9 * (1.0 + w[b].head<3>().norm())) << name;
-      EXPECT_NEAR(w[b].head<3>().dot(Eigen::Vector3d::UnitY()), 0.0, 1e-9 * (1.0 + w[b].head<3>().norm())) << name;
+      EXPECT_NEAR(w[b].head<3>().dot(Eigen::Vector3d::UnitY()), 0.0, 1e-9 * (1.0 + w[b].head<3>().norm()))
+          << name;
     }
   }
   EXPECT_GT(contacts, 0);
@@ -161,7 +164,8 @@ TEST(Physics, FrictionlessSceneHasNoTangentialForce) {
 }
 
 TEST(Physics, MixedFrictionPerPair) {
-  SceneSimulator sim(loadSceneFromUrdfFile(kDir + "/mixed.urdf", tight(loadSceneParams(kDir + "/mixed.yaml"))));
+  SceneSimulator sim(
+      loadSceneFromUrdfFile(kDir + "/mixed.urdf", tight(loadSceneParams(kDir + "/mixed.yaml"))));
   sim.run(0.1);
   // box_grip brakes at μ g (μ = 0.5), box_slick keeps 1 m/s, the ball rides along.
   EXPECT_NEAR(sim.body("box_grip").linear_velocity.x(), 1.0 - 0.5 * kG * sim.time(), 0.02 * 0.5);
@@ -232,8 +236,8 @@ TEST(Physics, FreeBodyIntegration) {
   const Eigen::Vector3d x_axis = sim.body(0).orientation * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(x_axis.x(), std::cos(angle), 1e-12);
   EXPECT_NEAR(x_axis.y(), std::sin(angle), 1e-12);
-  EXPECT_NEAR(sim.kineticEnergy(), 0.5 * 1.5 * std::pow(kG * n * dt, 2) +
-                                       0.5 * sim.body(0).inertia_local(2, 2) * 4.0, 1e-9);
+  EXPECT_NEAR(sim.kineticEnergy(),
+              0.5 * 1.5 * std::pow(kG * n * dt, 2) + 0.5 * sim.body(0).inertia_local(2, 2) * 4.0, 1e-9);
   // External wrenches act for one step only.
   sim.addExternalWrench(0, Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d::Zero());
   sim.step();

@@ -17,8 +17,9 @@ std::string freeBox(const std::string& name, const std::string& inertial, const 
                     const std::string& joint_type = "floating", const std::string& parent = "world") {
   return "<link name='" + name + "'>" + inertial + "<collision><geometry>" + geometry +
          "</geometry></collision></link>"
-         "<joint name='" + name + "_joint' type='" + joint_type + "'><parent link='" + parent +
-         "'/><child link='" + name + "'/><origin xyz='0 0 1'/></joint>";
+         "<joint name='" +
+         name + "_joint' type='" + joint_type + "'><parent link='" + parent + "'/><child link='" + name +
+         "'/><origin xyz='0 0 1'/></joint>";
 }
 
 const std::string kInertial =
@@ -44,11 +45,11 @@ void expectError(const std::string& urdf, const std::vector<std::string>& fragme
 }  // namespace
 
 TEST(SceneLoading, FloatingLinkIsDynamicRootAndFixedAreStatic) {
-  const std::string urdf = robot(
-      freeBox("crate", kInertial, kBox) +
-      "<link name='shelf'><collision><geometry><box size='1 1 0.1'/></geometry></collision></link>"
-      "<joint name='shelf_joint' type='fixed'><parent link='world'/><child link='shelf'/>"
-      "<origin xyz='0 0 0.5' rpy='0 0 1.5707963267948966'/></joint>");
+  const std::string urdf =
+      robot(freeBox("crate", kInertial, kBox) +
+            "<link name='shelf'><collision><geometry><box size='1 1 0.1'/></geometry></collision></link>"
+            "<joint name='shelf_joint' type='fixed'><parent link='world'/><child link='shelf'/>"
+            "<origin xyz='0 0 0.5' rpy='0 0 1.5707963267948966'/></joint>");
   const Scene s = loadSceneFromUrdfString(urdf, SceneParams());
   ASSERT_EQ(s.bodies.size(), 3u);
   const RigidBody& world = s.bodies[s.requireBody("world")];
@@ -88,8 +89,8 @@ TEST(SceneLoading, ErrorsNameTheLink) {
                     "<child link='arm'/><axis xyz='0 0 1'/></joint>"),
               {"link 'arm'", "continuous", "'elbow'"});
   // Fixed joint to a dynamic link.
-  expectError(robot(freeBox("crate", kInertial, kBox) +
-                    "<link name='lid'><collision><geometry>" + kBox + "</geometry></collision></link>"
+  expectError(robot(freeBox("crate", kInertial, kBox) + "<link name='lid'><collision><geometry>" + kBox +
+                    "</geometry></collision></link>"
                     "<joint name='lid_joint' type='fixed'><parent link='crate'/><child link='lid'/></joint>"),
               {"link 'lid'", "dynamic link 'crate'"});
   // Not XML at all.
@@ -166,7 +167,8 @@ TEST(SceneLoading, SolverMapTakesEveryTableParameter) {
   EXPECT_FALSE(p.solver.initial_guess);
   EXPECT_EQ(p.solver.stopping_rule, core::StoppingRule::kSofa);
   EXPECT_EQ(p.solver.time_budget, 0.5);
-  EXPECT_EQ(p.solver.tolerance, SceneParams::defaultSceneSolverParams().tolerance);  // not given: the scene default
+  EXPECT_EQ(p.solver.tolerance,
+            SceneParams::defaultSceneSolverParams().tolerance);  // not given: the scene default
 }
 
 TEST(SceneLoading, ShippedScenesLoad) {

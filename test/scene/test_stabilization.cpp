@@ -42,7 +42,8 @@ Scene boxInGround(double penetration, double erp) {
   s.name = "box_in_ground";
   s.params = params(erp, 0.0);
   s.bodies.push_back(ground());
-  s.bodies.push_back(dynamicBody("box", boxShape(0.2, 0.2, 0.2), 1.0, Eigen::Vector3d(0, 0, 0.1 - penetration)));
+  s.bodies.push_back(
+      dynamicBody("box", boxShape(0.2, 0.2, 0.2), 1.0, Eigen::Vector3d(0, 0, 0.1 - penetration)));
   return s;
 }
 
@@ -112,7 +113,8 @@ TEST(Softness, RestingStackHasTheAnalyticStaticDeflection) {
   std::map<std::string, std::vector<double>> depths;  // "lower/upper" → depths
   const StepProblem& sp = sim.lastProblem();
   for (const SceneContact& f : sp.frames)
-    depths[std::min(f.body_a_name, f.body_b_name) + "/" + std::max(f.body_a_name, f.body_b_name)].push_back(f.depth);
+    depths[std::min(f.body_a_name, f.body_b_name) + "/" + std::max(f.body_a_name, f.body_b_name)].push_back(
+        f.depth);
   const char* below[3] = {"box0/ground", "box0/box1", "box1/box2"};
   double load = 0.0;
   for (int i = 2; i >= 0; --i) {

@@ -41,7 +41,8 @@ double relDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 }  // namespace
 
 TEST(UnbuiltScene, YamlSelectsTheBodyFormAndTheUnbuiltSolve) {
-  const SceneParams p = parseSceneParams("compliance: bodies\nsolver: {name: nlgs, build_lcp: false}\n", "inline.yaml");
+  const SceneParams p =
+      parseSceneParams("compliance: bodies\nsolver: {name: nlgs, build_lcp: false}\n", "inline.yaml");
   EXPECT_EQ(p.compliance, ComplianceStorage::kBodies);
   EXPECT_FALSE(p.solver.build_lcp);
   EXPECT_STREQ(complianceStorageName(ComplianceStorage::kBodies), "bodies");
@@ -68,7 +69,8 @@ TEST(UnbuiltScene, BodyFormIsTheAssembledW) {
     const Eigen::MatrixXd from_bodies = sp.problem.bodies->toDense();
     EXPECT_LE((from_bodies - W).cwiseAbs().maxCoeff(), 1e-14 * W.cwiseAbs().maxCoeff());
     // Same block pattern as the scene's block-sparse W.
-    const core::BlockSparseMatrix sparse = std::get<core::BlockSparseMatrix>(model.compliance(sp.dt, ComplianceStorage::kBlockSparse));
+    const core::BlockSparseMatrix sparse =
+        std::get<core::BlockSparseMatrix>(model.compliance(sp.dt, ComplianceStorage::kBlockSparse));
     const core::BlockSparseMatrix assembled = sp.problem.bodies->assemble();
     EXPECT_EQ(assembled.block_col, sparse.block_col);
     EXPECT_EQ(assembled.row_start, sparse.row_start);

@@ -30,8 +30,8 @@ using BodyVector = Eigen::Matrix<double, 6, 1>;
 using JacobianBlock = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 6, 6>;
 
 struct ContactJacobian {
-  int rows = 0;      // the contact's rows (1..6), as in Problem::contacts
-  int body_a = -1;   // index into BodyCompliance::body_compliance; -1: static (no block)
+  int rows = 0;     // the contact's rows (1..6), as in Problem::contacts
+  int body_a = -1;  // index into BodyCompliance::body_compliance; -1: static (no block)
   int body_b = -1;
   JacobianBlock jacobian_a;  // rows × 6 when body_a >= 0, else unused (may be 0 × 6)
   JacobianBlock jacobian_b;  // rows × 6 when body_b >= 0

@@ -30,7 +30,7 @@ inline void tangentsFromNormal(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Ei
 // tangents of the default normal +z.
 struct ContactFrame {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   // unit; the force on body A is +λ_n n
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();    // unit; the force on body A is +λ_n n
   Eigen::Vector3d tangent1 = Eigen::Vector3d::UnitY();  // unit, (n, t1, t2) right-handed
   Eigen::Vector3d tangent2 = -Eigen::Vector3d::UnitX();
   // True when the tangents were not given but derived by tangentsFromNormal: a message

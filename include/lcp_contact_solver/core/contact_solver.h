@@ -51,13 +51,13 @@ class ContactSolver {
   void prepare(const Problem& stated, Clock::time_point start, Prepared& p) const;
   bool refusesExtendedFriction(const Prepared& p, Clock::time_point start, SolveResult& result) const;
   KernelReport solvePrepared(Prepared& p, Eigen::VectorXd& lambda, SolveResult& result) const;
-  void expandForces(const Prepared& p, Eigen::VectorXd lambda, KernelReport& report, SolveResult& result) const;
+  void expandForces(const Prepared& p, Eigen::VectorXd lambda, KernelReport& report,
+                    SolveResult& result) const;
   void measureResult(const Prepared& p, KernelReport& report, SolveResult& result) const;
   void explainResult(const Prepared& p, SolveResult& result) const;
   SolveResult invalidInput(const std::string& error) const;
   Eigen::VectorXd initialGuess(const Problem& problem, const std::vector<int>& offsets) const;
-  void rememberForces(const Problem& problem, const std::vector<int>& offsets,
-                      const Eigen::VectorXd& lambda);
+  void rememberForces(const Problem& problem, const std::vector<int>& offsets, const Eigen::VectorXd& lambda);
 
   SolverParams params_;
   std::unordered_map<std::int64_t, std::vector<double>> warm_start_;

@@ -29,7 +29,8 @@ Islands findIslands(const Problem& problem);
 // The problem restricted to `contacts` (ascending): their rows of W and d_free, same
 // storage as `problem` (the body form: their bodies, renumbered). `offsets` are
 // problem.rowOffsets().
-Problem islandProblem(const Problem& problem, const std::vector<int>& offsets, const std::vector<int>& contacts);
+Problem islandProblem(const Problem& problem, const std::vector<int>& offsets,
+                      const std::vector<int>& contacts);
 
 // A kernel run on one island's context (called concurrently for different islands).
 using IslandKernel = std::function<KernelReport(const SolveContext&, Eigen::VectorXd&)>;

@@ -45,7 +45,7 @@ int rowsForType(ContactType type);
 struct Contact {
   std::int64_t id = 0;  // persistent across cycles; keys the warm start
   ContactType type = ContactType::kFrictional;
-  int rows = 3;         // 3 frictional, 1 frictionless, 4 torsional, 6 rolling, >= 1 bilateral
+  int rows = 3;  // 3 frictional, 1 frictionless, 4 torsional, 6 rolling, >= 1 bilateral
   // Friction coefficient (dimensionless). kMuDefault (-1) means "not given": the solver's
   // `mu` parameter is used; any other negative value is invalid input. Only meaningful for frictional contacts; μ = 0 makes a frictional
   // contact cost one row.
@@ -80,7 +80,7 @@ struct BlockSparseMatrix {
   int rows() const { return block_offset.empty() ? 0 : block_offset.back(); }
 
   // Adds a block; blocks must be added in block-row order (and then any column order).
-  void beginRow();                                  // starts the next block row
+  void beginRow();  // starts the next block row
   void addBlock(int block_col, const Eigen::Ref<const Eigen::MatrixXd>& block);
   // Starts an empty matrix with the given block sizes.
   static BlockSparseMatrix withBlockSizes(const std::vector<int>& sizes);
@@ -119,8 +119,8 @@ struct Problem {
   Eigen::VectorXd d_free;  // free-motion violation, one entry per row
   std::string name;        // for reports (file name, topic, ...)
 
-  int rowCount() const;                      // sum of contact rows
-  std::vector<int> rowOffsets() const;       // first row of each contact, size nc + 1
+  int rowCount() const;                 // sum of contact rows
+  std::vector<int> rowOffsets() const;  // first row of each contact, size nc + 1
 };
 
 // Builds a frictionless problem (an LCP w = M z + q) with one contact per row, ids 0..n-1.

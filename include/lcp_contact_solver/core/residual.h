@@ -29,8 +29,7 @@ double naturalMapResidual(const Problem& problem, const std::vector<double>& mu,
 std::vector<double> effectiveMu(const Problem& problem, double default_mu);
 
 // Classifies each contact from its force; `ignored` marks contacts forced to kIgnored.
-std::vector<ContactState> classifyContacts(const Problem& problem,
-                                           const std::vector<double>& mu,
+std::vector<ContactState> classifyContacts(const Problem& problem, const std::vector<double>& mu,
                                            const Eigen::VectorXd& lambda,
                                            const std::vector<bool>& ignored = {});
 

@@ -21,29 +21,29 @@ enum class ContactState : std::uint8_t {
 constexpr int kContactStateCount = 5;
 
 enum class SolveStatus : std::uint8_t {
-  kConverged = 0,         // residual reached the tolerance
-  kMaxIterations,         // iteration or pivot cap reached first; best iterate returned
-  kZeroDiagonal,          // a row has W_ii <= 0 and minW does not exclude it: GS cannot run
-  kNotApplicable,         // this solver cannot treat this problem (e.g. Lemke + friction)
-  kRayTermination,        // Lemke ended on a secondary ray: no solution found
-  kNumericalFailure,      // a pivot or step became non-finite; best finite iterate kept
-  kInvalidInput,          // the problem or parameters failed validation
-  kTimeBudget,            // SolverParams::time_budget ran out; best iterate returned
+  kConverged = 0,     // residual reached the tolerance
+  kMaxIterations,     // iteration or pivot cap reached first; best iterate returned
+  kZeroDiagonal,      // a row has W_ii <= 0 and minW does not exclude it: GS cannot run
+  kNotApplicable,     // this solver cannot treat this problem (e.g. Lemke + friction)
+  kRayTermination,    // Lemke ended on a secondary ray: no solution found
+  kNumericalFailure,  // a pivot or step became non-finite; best finite iterate kept
+  kInvalidInput,      // the problem or parameters failed validation
+  kTimeBudget,        // SolverParams::time_budget ran out; best iterate returned
 };
 
 const char* statusName(SolveStatus status);
 const char* stateName(ContactState state);
 
 struct SolveResult {
-  Eigen::VectorXd forces;  // λ, one entry per row (N, or N·s for impulses)
-  Eigen::VectorXd d;       // W λ + d_free with the W that was solved (regularized)
+  Eigen::VectorXd forces;            // λ, one entry per row (N, or N·s for impulses)
+  Eigen::VectorXd d;                 // W λ + d_free with the W that was solved (regularized)
   std::vector<ContactState> states;  // one per contact
   SolveStatus status = SolveStatus::kInvalidInput;
   bool converged = false;
   // Sweeps (pgs, nlgs), pivots (lemke), iterations (apgd), nlgs sweeps + Newton steps
   // (newton); summed over maxF re-solves.
   int iterations = 0;
-  int resolves = 0;           // extra solves triggered by maxF
+  int resolves = 0;  // extra solves triggered by maxF
   // The solver's own stopping measure at exit (the residual of the problem it solved: for
   // a pyramid friction model, the pyramid's natural-map residual).
   double solver_error = 0.0;
@@ -54,7 +54,7 @@ struct SolveResult {
   // The friction law the forces solve: kCoulombDisc unless pgs or lemke solved a problem
   // with friction under a pyramid SolverParams::friction_model.
   FrictionModel friction_model = FrictionModel::kCoulombDisc;
-  double solve_time = 0.0;    // wall time of the solve, seconds
+  double solve_time = 0.0;  // wall time of the solve, seconds
   // Name of the solver that ran; for auto the path of the portfolio, "auto:" and the
   // members in the order they ran joined by "->" (e.g. "auto:newton->prox").
   std::string solver;
@@ -63,7 +63,7 @@ struct SolveResult {
   // The unbuilt Gauss-Seidel ran on the problem's body form (build_lcp = false): W was
   // never assembled. False for every built solve.
   bool unbuilt = false;
-  std::string message;        // human-readable detail for non-converged statuses
+  std::string message;                   // human-readable detail for non-converged statuses
   std::vector<double> residual_history;  // per sweep/pivot, only with displayDebug
 };
 

@@ -22,7 +22,7 @@ enum ParamAccess : unsigned {
 struct ParamSpec {
   std::string name;  // ROS parameter name = SolverParams member
   ParamType type;
-  std::string default_text;  // as paramText() writes it
+  std::string default_text;     // as paramText() writes it
   double min = 0.0, max = 0.0;  // dynamic_reconfigure's range (kDouble, kInt)
   bool sofa = false;            // a SOFA LCPConstraintSolver field
   unsigned access = 0;          // ParamAccess bits
@@ -48,7 +48,8 @@ std::string setParam(SolverParams* params, const std::string& name, const std::s
 // One "name=value" (spaces around name and value ignored, as written in YAML lists): the
 // parameter must have every bit of `required_access`. Returns "" or the fault, as setParam,
 // or "'text' is not of the form name=value".
-std::string applyAssignment(SolverParams* params, const std::string& assignment, unsigned required_access = 0);
+std::string applyAssignment(SolverParams* params, const std::string& assignment,
+                            unsigned required_access = 0);
 
 // The value as text that setParam reads back exactly (doubles: shortest round trip).
 std::string paramText(const SolverParams& params, const std::string& name);

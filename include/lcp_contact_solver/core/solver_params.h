@@ -9,22 +9,22 @@
 namespace lcp_contact_solver::core {
 
 enum class SolverKind {
-  kAuto,       // the portfolio (portfolio.cpp, docs/ARCHITECTURE.md): starts with the
-               // member the problem's features predict, watches its progress in slices and
-               // continues from the best iterate with the next member when it stalls or fails.
-               // maxIt and time_budget bound the whole portfolio; SolveResult::solver reports
-               // the path ("auto:newton->prox"), SolveResult::stages the time in each member.
-  kPgs,        // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); with friction
-               // only for a pyramid friction_model (boxed PGS)
-  kNlgs,       // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)
-  kLemke,      // lexicographic Lemke pivoting; exact, for LCPs (no friction, or friction
-               // with a pyramid friction_model: the Stewart-Trinkle LCP)
-  kApgd,       // accelerated projected gradient (Nesterov, adaptive step, restart) on the
-               // cone complementarity problem with De Saxcé's fixed point; Coulomb disc
-  kNewton,     // semismooth Newton on the Alart-Curnier function, regularized, with line
-               // search, warm-started by nlgs; high accuracy, rank-deficient W
-  kProx,       // proximal point outer loop around newton (W + σI, moving prox centre, σ
-               // adapted; prox_newton.cpp): rank-deficient or ill-conditioned W at 1e-8..1e-12
+  kAuto,    // the portfolio (portfolio.cpp, docs/ARCHITECTURE.md): starts with the
+            // member the problem's features predict, watches its progress in slices and
+            // continues from the best iterate with the next member when it stalls or fails.
+            // maxIt and time_budget bound the whole portfolio; SolveResult::solver reports
+            // the path ("auto:newton->prox"), SolveResult::stages the time in each member.
+  kPgs,     // projected Gauss-Seidel on the LCP (SOFA gaussSeidelLCP1); with friction
+            // only for a pyramid friction_model (boxed PGS)
+  kNlgs,    // nonlinear block Gauss-Seidel on the Coulomb disc (SOFA nlcp_gaussseidel)
+  kLemke,   // lexicographic Lemke pivoting; exact, for LCPs (no friction, or friction
+            // with a pyramid friction_model: the Stewart-Trinkle LCP)
+  kApgd,    // accelerated projected gradient (Nesterov, adaptive step, restart) on the
+            // cone complementarity problem with De Saxcé's fixed point; Coulomb disc
+  kNewton,  // semismooth Newton on the Alart-Curnier function, regularized, with line
+            // search, warm-started by nlgs; high accuracy, rank-deficient W
+  kProx,    // proximal point outer loop around newton (W + σI, moving prox centre, σ
+            // adapted; prox_newton.cpp): rank-deficient or ill-conditioned W at 1e-8..1e-12
 };
 
 // The friction law. The disc is Coulomb's isotropic cone |λ_t| <= μ λ_n. The pyramids

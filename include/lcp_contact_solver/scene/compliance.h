@@ -77,9 +77,9 @@ class RigidContactModel {
 
  private:
   struct Side {
-    int body = -1;                        // -1: static (no block)
-    Eigen::Matrix<double, 6, 6> J;        // first `rows` rows used
-    Eigen::Matrix<double, 6, 6> MinvJt;   // M⁻¹ Jᵀ
+    int body = -1;                       // -1: static (no block)
+    Eigen::Matrix<double, 6, 6> J;       // first `rows` rows used
+    Eigen::Matrix<double, 6, 6> MinvJt;  // M⁻¹ Jᵀ
   };
   struct ContactData {
     int rows = 3;
@@ -93,7 +93,7 @@ class RigidContactModel {
   int body_count_ = 0;
   std::vector<ContactData> contacts_;
   std::vector<int> offsets_;
-  std::vector<std::vector<int>> body_contacts_;  // dynamic body → contacts, ascending
+  std::vector<std::vector<int>> body_contacts_;            // dynamic body → contacts, ascending
   std::vector<Eigen::Matrix<double, 6, 6>> inverse_mass_;  // per body (zero for static)
 };
 
@@ -103,7 +103,7 @@ std::vector<core::Contact> problemContacts(const Scene& scene, const std::vector
 // Problem (contacts, W, d_free) of the given frames; frames.size() == contacts. With
 // kBodies the problem carries the body form (Problem::bodies) and no W.
 core::Problem buildProblem(const Scene& scene, const std::vector<SceneContact>& frames,
-                     const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
+                           const std::vector<Vector6d>& v_free, double dt, ComplianceStorage storage);
 
 }  // namespace scene
 }  // namespace lcp_contact_solver

@@ -72,11 +72,11 @@ struct SceneContact : core::ContactFrame {
 std::int64_t makeContactId(int body_a, int body_b, int slot);
 
 struct ContactGenerationStats {
-  int broadphase_pairs = 0;    // shape pairs whose AABBs overlap
-  int skipped_disabled = 0;    // of those, dropped as disabled pairs
-  int narrowphase_tests = 0;   // fcl::collide calls
+  int broadphase_pairs = 0;   // shape pairs whose AABBs overlap
+  int skipped_disabled = 0;   // of those, dropped as disabled pairs
+  int narrowphase_tests = 0;  // fcl::collide calls
   int contacts = 0;
-  int new_ids = 0;             // contacts that got a fresh slot
+  int new_ids = 0;  // contacts that got a fresh slot
 };
 
 class ContactGenerator {

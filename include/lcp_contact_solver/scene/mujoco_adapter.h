@@ -83,19 +83,19 @@ const char* mujocoRowKindName(MujocoRowKind kind);
 // One core contact of the extracted problem and where it comes from.
 struct MujocoEntry {
   MujocoRowKind kind = MujocoRowKind::kFrictionless;
-  int efc_row = 0;     // its first MuJoCo row
-  int mj_contact = -1; // index into d->contact (contacts), else -1
-  int edge = -1;       // pyramid edge 0 .. 2(condim−1)−1: direction edge/2, sign + for even
-  int object = -1;     // joint / tendon / equality id (limits, equalities), else -1
-  int body_a = 0;      // MuJoCo body ids: body_a receives +λ along the normal
+  int efc_row = 0;      // its first MuJoCo row
+  int mj_contact = -1;  // index into d->contact (contacts), else -1
+  int edge = -1;        // pyramid edge 0 .. 2(condim−1)−1: direction edge/2, sign + for even
+  int object = -1;      // joint / tendon / equality id (limits, equalities), else -1
+  int body_a = 0;       // MuJoCo body ids: body_a receives +λ along the normal
   int body_b = 0;
   int geom1 = -1, geom2 = -1;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world frame, m
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   // unit
   Eigen::Vector3d tangent1 = Eigen::Vector3d::Zero();  // unit (elliptic), else zero
   Eigen::Vector3d tangent2 = Eigen::Vector3d::Zero();
-  double mu = 0.0;     // elliptic: friction[0]; pyramid edge: μ of its direction
-  double dist = 0.0;   // contacts: MuJoCo's distance (negative: penetration), m
+  double mu = 0.0;    // elliptic: friction[0]; pyramid edge: μ of its direction
+  double dist = 0.0;  // contacts: MuJoCo's distance (negative: penetration), m
 };
 
 struct MujocoExtractOptions {
@@ -107,7 +107,7 @@ struct MujocoExtractOptions {
   // dropped rows is folded into d_free (d_free += AR_kd f_d), which is exact when MuJoCo's
   // solver ran and is what a cross-check of the kept rows needs.
   bool fold_dropped = false;
-  bool scale_rows = true;          // the row scaling described at the top of this file
+  bool scale_rows = true;  // the row scaling described at the top of this file
   // W storage: dense, block-sparse (one block per pair of coupled entries), or automatic:
   // block-sparse when the problem has more than `dense_max_rows` rows.
   enum class Storage { kAuto, kDense, kBlockSparse } storage = Storage::kAuto;
@@ -115,16 +115,16 @@ struct MujocoExtractOptions {
 };
 
 struct MujocoProblem {
-  core::Problem problem;                  // contacts (id, type, rows, μ), W, d_free in problem order
-  std::vector<MujocoEntry> entries; // one per problem contact
-  std::vector<int> efc_row;         // MuJoCo row of each problem row
-  Eigen::VectorXd row_scale;        // s of each problem row (λ = s f)
-  Eigen::VectorXd mujoco_lambda;    // MuJoCo's efc_force in problem units (s f)
-  std::vector<int> dropped_rows;    // MuJoCo rows left out
+  core::Problem problem;             // contacts (id, type, rows, μ), W, d_free in problem order
+  std::vector<MujocoEntry> entries;  // one per problem contact
+  std::vector<int> efc_row;          // MuJoCo row of each problem row
+  Eigen::VectorXd row_scale;         // s of each problem row (λ = s f)
+  Eigen::VectorXd mujoco_lambda;     // MuJoCo's efc_force in problem units (s f)
+  std::vector<int> dropped_rows;     // MuJoCo rows left out
   int nefc = 0;
-  int ncon = 0;                     // MuJoCo's contacts in the constraint problem
-  bool pyramidal = true;            // the model's cone
-  double time = 0.0;                // d->time of the step
+  int ncon = 0;           // MuJoCo's contacts in the constraint problem
+  bool pyramidal = true;  // the model's cone
+  double time = 0.0;      // d->time of the step
 
   // Forces of every MuJoCo row (nefc) from problem forces λ; dropped rows get 0, or their
   // value in `dropped_source` (e.g. d->efc_force after MuJoCo's own solve) when given.

@@ -19,12 +19,12 @@ namespace scene {
 
 // Overrides of the model's mjOption, applied after loading. Empty / negative = keep the model's.
 struct MujocoOptions {
-  std::string cone;      // "pyramidal" or "elliptic"
-  std::string solver;    // MuJoCo's own solver: "pgs", "cg" or "newton"
-  std::string jacobian;  // "dense", "sparse" or "auto"
-  int iterations = -1;   // MuJoCo's solver iterations
-  double tolerance = -1; // MuJoCo's solver tolerance (0: run every iteration)
-  double timestep = -1;  // s
+  std::string cone;       // "pyramidal" or "elliptic"
+  std::string solver;     // MuJoCo's own solver: "pgs", "cg" or "newton"
+  std::string jacobian;   // "dense", "sparse" or "auto"
+  int iterations = -1;    // MuJoCo's solver iterations
+  double tolerance = -1;  // MuJoCo's solver tolerance (0: run every iteration)
+  double timestep = -1;   // s
 };
 
 // Parses the names above ("" keeps the model's). False with a sentence for an unknown one.

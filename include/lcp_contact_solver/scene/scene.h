@@ -41,9 +41,9 @@ struct RigidBody {
   bool is_static = true;
 
   // Mass properties (dynamic bodies only).
-  double mass = 0.0;                                          // kg
-  Eigen::Vector3d com_local = Eigen::Vector3d::Zero();        // centre of mass in the link frame
-  Eigen::Matrix3d inertia_local = Eigen::Matrix3d::Zero();    // about the COM, link-frame axes (kg m²)
+  double mass = 0.0;                                        // kg
+  Eigen::Vector3d com_local = Eigen::Vector3d::Zero();      // centre of mass in the link frame
+  Eigen::Matrix3d inertia_local = Eigen::Matrix3d::Zero();  // about the COM, link-frame axes (kg m²)
   Eigen::Matrix3d inv_inertia_local = Eigen::Matrix3d::Zero();
 
   std::vector<CollisionShape> shapes;

@@ -80,9 +80,9 @@ struct InitialVelocity {
 // (a box resting on one point would rock).
 struct GroundPlane {
   bool enabled = false;
-  double height = 0.0;       // m, z of the top face
-  double half_extent = 50.0; // m, half side length in x and y
-  double thickness = 1.0;    // m
+  double height = 0.0;        // m, z of the top face
+  double half_extent = 50.0;  // m, half side length in x and y
+  double thickness = 1.0;     // m
 };
 
 struct SceneParams {

@@ -29,22 +29,22 @@ namespace scene {
 
 // What one step asks the solver.
 struct StepProblem {
-  core::Problem problem;                  // contacts (id, type, rows, μ), W, d_free; rows in frame order
-  std::vector<SceneContact> frames; // one per problem contact, same order
-  double dt = 0.0;                  // s
-  double time = 0.0;                // simulated time at the start of the step (s)
-  long long step_index = 0;         // 0 for the first step
+  core::Problem problem;             // contacts (id, type, rows, μ), W, d_free; rows in frame order
+  std::vector<SceneContact> frames;  // one per problem contact, same order
+  double dt = 0.0;                   // s
+  double time = 0.0;                 // simulated time at the start of the step (s)
+  long long step_index = 0;          // 0 for the first step
 };
 
 struct StepStats {
   long long step_index = 0;
-  double time = 0.0;           // simulated time after the step (s)
+  double time = 0.0;  // simulated time after the step (s)
   int contacts = 0;
   int rows = 0;
   int frictionless_contacts = 0;
   int impacts = 0;  // contacts that bounced this step (restitution)
   ContactGenerationStats generation;
-  bool solved = false;         // the in-process solver ran (false without contacts or with applyForces)
+  bool solved = false;  // the in-process solver ran (false without contacts or with applyForces)
   core::SolveStatus status = core::SolveStatus::kConverged;
   bool converged = true;
   int iterations = 0;
@@ -96,8 +96,8 @@ class SceneSimulator {
   double potentialEnergy() const;  // J, −m g·c relative to the world origin
   double energy() const { return kineticEnergy() + potentialEnergy(); }
 
-  const StepProblem& lastProblem() const { return problem_; }    // the last built step
-  const core::SolveResult& lastSolve() const { return last_solve_; }   // the in-process solve of step()
+  const StepProblem& lastProblem() const { return problem_; }         // the last built step
+  const core::SolveResult& lastSolve() const { return last_solve_; }  // the in-process solve of step()
   const Eigen::VectorXd& lastForces() const { return last_forces_; }  // λ applied last
   const StepStats& lastStats() const { return last_stats_; }
   // Contact wrench [force; torque about the COM] on each body from the last applied forces.

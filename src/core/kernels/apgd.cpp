@@ -70,10 +70,14 @@ std::vector<ContactSet> contactSets(const SolveContext& ctx) {
     set.offset = ctx.offsets[i];
     set.rows = c.rows;
     set.mu = ctx.mu[i];
-    if (ctx.ignored[i]) set.kind = SetKind::kZero;
-    else if (c.type == ContactType::kBilateral) set.kind = SetKind::kFree;
-    else if (c.type == ContactType::kFrictionless || set.mu == 0.0) set.kind = SetKind::kNormal;
-    else set.kind = SetKind::kCone;
+    if (ctx.ignored[i])
+      set.kind = SetKind::kZero;
+    else if (c.type == ContactType::kBilateral)
+      set.kind = SetKind::kFree;
+    else if (c.type == ContactType::kFrictionless || set.mu == 0.0)
+      set.kind = SetKind::kNormal;
+    else
+      set.kind = SetKind::kCone;
   }
   return sets;
 }
@@ -87,15 +91,12 @@ void project(const std::vector<ContactSet>& sets, Eigen::VectorXd& x) {
       case SetKind::kZero:
         for (int k = 0; k < set.rows; ++k) r[k] = 0.0;
         break;
-      case SetKind::kFree:
-        break;
+      case SetKind::kFree: break;
       case SetKind::kNormal:
         r[0] = std::max(0.0, r[0]);
         for (int k = 1; k < set.rows; ++k) r[k] = 0.0;
         break;
-      case SetKind::kCone:
-        projectOntoCone(set.mu, r);
-        break;
+      case SetKind::kCone: projectOntoCone(set.mu, r); break;
     }
   }
 }
@@ -125,8 +126,7 @@ double shiftedResidual(const std::vector<ContactSet>& sets, const Eigen::VectorX
     const double* l = x.data() + set.offset;
     const double* w = u.data() + set.offset;
     switch (set.kind) {
-      case SetKind::kZero:
-        break;
+      case SetKind::kZero: break;
       case SetKind::kFree:
         for (int k = 0; k < set.rows; ++k) sum += w[k] * w[k];
         break;
@@ -222,7 +222,8 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       report.solver_error = best_residual;
       return report;
     }
-    const double theta_next = 0.5 * (std::sqrt(theta * theta * theta * theta + 4.0 * theta * theta) - theta * theta);
+    const double theta_next =
+        0.5 * (std::sqrt(theta * theta * theta * theta + 4.0 * theta * theta) - theta * theta);
     double beta = theta * (1.0 - theta) / (theta * theta + theta_next);
     // Gradient restart: momentum that climbs f is dropped.
     const bool restart = g.dot(x_new - x) > 0.0;

@@ -44,8 +44,8 @@ Eigen::Vector2d projectOntoPolygon(const FrictionPolygon& polygon, const Eigen::
 // frictional contacts e_n = λ_n - max(0, λ_n - d_n), e_t = λ_t - Proj_P(μ max(λ_n, 0))(λ_t - d_t),
 // which is zero exactly when 0 <= λ_n ⟂ d_n >= 0, λ_t ∈ P(μ λ_n) and -d_t is in the
 // normal cone of P at λ_t (maximum dissipation over the polygon); other rows as the disc.
-double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
-                       const FrictionPolygon& polygon, const Eigen::VectorXd& lambda,
-                       const Eigen::VectorXd& d, const std::vector<bool>& ignored);
+double pyramidResidual(const Problem& problem, const std::vector<double>& mu, const FrictionPolygon& polygon,
+                       const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
+                       const std::vector<bool>& ignored);
 
 }  // namespace lcp_contact_solver::core

@@ -54,9 +54,8 @@ constexpr int kRefreshInterval = 50;
 bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
 
 template <class Access>
-KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBlock>& blocks,
-                            Access& access, Eigen::VectorXd& lambda,
-                            const FrictionPolygon* polygon) {
+KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBlock>& blocks, Access& access,
+                            Eigen::VectorXd& lambda, const FrictionPolygon* polygon) {
   const SolverParams& params = *ctx.params;
   const double omega = params.sor;
   // The problem solved: the disc's natural map, or the pyramid's (friction_pyramid.h).
@@ -162,8 +161,9 @@ KernelReport runProjectedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
   if (ctx.hasFriction()) {
     KernelReport report;
     report.status = SolveStatus::kNotApplicable;
-    report.message = "pgs solves frictionless problems; this one has contacts with mu > 0 "
-                     "(use nlgs, or a pyramid friction_model for boxed pgs)";
+    report.message =
+        "pgs solves frictionless problems; this one has contacts with mu > 0 "
+        "(use nlgs, or a pyramid friction_model for boxed pgs)";
     return report;
   }
   return runGaussSeidel(ctx, lambda);

@@ -58,9 +58,7 @@ LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
     const int first = offsets[c];
     switch (contact.type) {
       case ContactType::kFrictional:  // μ = 0 here: the normal row only
-      case ContactType::kFrictionless:
-        lcp.variables.push_back({first, 1.0});
-        break;
+      case ContactType::kFrictionless: lcp.variables.push_back({first, 1.0}); break;
       case ContactType::kBilateral:
         for (int k = 0; k < offsets[c + 1] - first; ++k) {
           lcp.variables.push_back({first + k, 1.0});
@@ -68,8 +66,7 @@ LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
         }
         break;
       case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
-      case ContactType::kRolling:
-        break;
+      case ContactType::kRolling: break;
     }
   }
   const int n = static_cast<int>(lcp.variables.size());
@@ -107,8 +104,11 @@ int firstFrictionalContact(const SolveContext& ctx, const std::vector<double>& m
 class LemkeTableau {
  public:
   explicit LemkeTableau(const LcpData& lcp)
-      : lcp_(lcp), n_(static_cast<int>(lcp.q.size())),
-        inverse_(RowMajorMatrix::Identity(n_, n_)), values_(lcp.q), basis_(n_) {
+      : lcp_(lcp),
+        n_(static_cast<int>(lcp.q.size())),
+        inverse_(RowMajorMatrix::Identity(n_, n_)),
+        values_(lcp.q),
+        basis_(n_) {
     for (int i = 0; i < n_; ++i) basis_[i] = i;  // all w basic
   }
 
@@ -151,8 +151,7 @@ class LemkeTableau {
     if (!(column_scale > 0.0)) return -1;
     const double pivot_floor = kPivotTolerance * column_scale;
     const double q_scale = lcp_.q.cwiseAbs().maxCoeff();
-    const double value_floor =
-        kRoundoffTolerance * std::max(values_.cwiseAbs().maxCoeff(), q_scale);
+    const double value_floor = kRoundoffTolerance * std::max(values_.cwiseAbs().maxCoeff(), q_scale);
 
     // Candidates: rows whose entry is positive beyond rounding. Row i of B⁻¹ produces both
     // the column entry (B⁻¹_i A_j) and the value (B⁻¹_i q), so its scale bounds their noise.
@@ -250,8 +249,7 @@ class LemkeTableau {
 
   // The z part of the basic solution (`basis`, `values`) as full-length forces, z clipped
   // to ≥ 0.
-  Eigen::VectorXd forces(const std::vector<int>& basis, const Eigen::VectorXd& values,
-                         int row_count) const {
+  Eigen::VectorXd forces(const std::vector<int>& basis, const Eigen::VectorXd& values, int row_count) const {
     Eigen::VectorXd lambda = Eigen::VectorXd::Zero(row_count);
     for (int i = 0; i < n_; ++i) {
       const int variable = basis[i];
@@ -354,8 +352,9 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   if (variables > kMaxLemkeSize || row_count > kMaxLemkeSize) {
     std::ostringstream message;
-    message << "Lemke's dense tableau is limited to " << kMaxLemkeSize << " variables and rows; this problem has "
-            << variables << " variables on " << row_count << " rows (it would need about "
+    message << "Lemke's dense tableau is limited to " << kMaxLemkeSize
+            << " variables and rows; this problem has " << variables << " variables on " << row_count
+            << " rows (it would need about "
             << 24.0 * static_cast<double>(std::max<long long>(variables, row_count)) *
                    static_cast<double>(std::max<long long>(variables, row_count)) / 1e9
             << " GB); use pgs, nlgs, apgd or newton";
@@ -397,8 +396,8 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   while (true) {
     if (ctx.deadlinePassed()) {
       std::ostringstream out;
-      out << "Lemke ran out of the time budget after " << pivots << " pivots (z0 = "
-          << tableau.z0Value() << "); forces are the last basic solution, not an LCP solution";
+      out << "Lemke ran out of the time budget after " << pivots << " pivots (z0 = " << tableau.z0Value()
+          << "); forces are the last basic solution, not an LCP solution";
       status = SolveStatus::kTimeBudget;
       message = out.str();
       break;
@@ -426,8 +425,8 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       row = tableau.leavingRow(column, entering_scale);
       if (row < 0) {
         std::ostringstream out;
-        out << "Lemke ended on a secondary ray after " << pivots << " pivots (z0 = "
-            << tableau.z0Value() << "): no solution found; for positive semidefinite M (e.g. "
+        out << "Lemke ended on a secondary ray after " << pivots << " pivots (z0 = " << tableau.z0Value()
+            << "): no solution found; for positive semidefinite M (e.g. "
             << "frictionless contacts with W + r I) this means the constraints are infeasible";
         status = SolveStatus::kRayTermination;
         message = out.str();
@@ -447,8 +446,7 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       return report;
     }
     if (record) {
-      report.history.push_back(
-          ctx.residual(tableau.forces(tableau.basis(), tableau.values(), row_count)));
+      report.history.push_back(ctx.residual(tableau.forces(tableau.basis(), tableau.values(), row_count)));
     }
     if (left == tableau.z0()) {
       status = SolveStatus::kConverged;
@@ -460,8 +458,7 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   lambda = tableau.forces(tableau.basis(), tableau.values(), row_count);
   double residual = ctx.residual(lambda);
   if (status == SolveStatus::kConverged) {
-    const Eigen::VectorXd refined =
-        tableau.forces(tableau.basis(), tableau.refinedValues(), row_count);
+    const Eigen::VectorXd refined = tableau.forces(tableau.basis(), tableau.refinedValues(), row_count);
     const double refined_residual = ctx.residual(refined);
     if (refined_residual < residual) {
       lambda = refined;

@@ -31,7 +31,8 @@ std::string prepareExtendedRows(const Contact& c, const Eigen::MatrixXd& D, cons
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (R + R.transpose()));
     blk.roll_basis = eig.eigenvectors();
     blk.roll_eigen = eig.eigenvalues();
-    if (!(blk.roll_eigen.maxCoeff() > 0.0)) return where + " has a rolling block of W with no positive eigenvalue";
+    if (!(blk.roll_eigen.maxCoeff() > 0.0))
+      return where + " has a rolling block of W with no positive eigenvalue";
     blk.roll_step = 1.0 / blk.roll_eigen.maxCoeff();
   }
   return "";
@@ -54,7 +55,8 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.kind = LocalKind::kSkip;
       continue;
     }
-    Eigen::MatrixXd D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
+    Eigen::MatrixXd D =
+        contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
     D.diagonal().array() += r;
     // Named only for a message: no string per contact per solve.
     const auto where = [&] { return "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")"; };

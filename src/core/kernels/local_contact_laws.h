@@ -29,20 +29,19 @@ constexpr double kLocalTolerance = 1e-14;
 
 enum class LocalKind : std::uint8_t { kSkip, kNormalOnly, kCoulomb, kBilateral, kPolygon, kCoulombExtended };
 
-
 // What a contact's local step needs, computed once per solve. Stored flat, one per contact.
 struct LocalBlock {
   LocalKind kind = LocalKind::kSkip;
   int offset = 0;
   int rows = 0;
   double mu = 0.0;
-  double inv_nn = 0.0;          // 1 / D_nn
+  double inv_nn = 0.0;                          // 1 / D_nn
   Eigen::Matrix3d D = Eigen::Matrix3d::Zero();  // diagonal block (+ r I), frictional only
   // Tangential 2x2 block T = Q diag(a) Qᵀ, for the disc-constrained local problem.
   Eigen::Matrix2d tangent_basis = Eigen::Matrix2d::Identity();
   Eigen::Vector2d tangent_eigen = Eigen::Vector2d::Zero();
   bool tangent_symmetric = true;
-  double tangent_step = 0.0;    // 1 / largest eigenvalue, for the non-symmetric fallback
+  double tangent_step = 0.0;  // 1 / largest eigenvalue, for the non-symmetric fallback
   // D_nt or D_tn nonzero: the normal and tangential local steps must be alternated.
   bool coupled = true;
   // D⁻¹ when D is well conditioned, for the one-shot sticking solution.
@@ -73,8 +72,8 @@ struct LocalBlock {
 // at the left end climbs monotonically and quadratically to the root; a bisection
 // safeguard covers the indefinite case. h'(ν) = Σ g_i²/(a_i+ν)³ / |x|³ uses products,
 // not pow.
-inline Eigen::Vector2d solveDiscProblem(const Eigen::Matrix2d& basis, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                                 double radius) {
+inline Eigen::Vector2d solveDiscProblem(const Eigen::Matrix2d& basis, const Eigen::Vector2d& a,
+                                        const Eigen::Vector2d& b, double radius) {
   if (radius <= 0.0) return Eigen::Vector2d::Zero();
   const Eigen::Vector2d g = basis.transpose() * b;
   const double a_min = std::min(a[0], a[1]);
@@ -87,8 +86,8 @@ inline Eigen::Vector2d solveDiscProblem(const Eigen::Matrix2d& basis, const Eige
   if (g_norm == 0.0) return Eigen::Vector2d::Zero();  // no preferred direction, no drive
   const double shift = g_norm / radius;
   double lo = std::max(std::max(0.0, -a_min), shift - a_max);  // |x(lo)| >= radius
-  double hi = std::max(lo, shift - a_min);                      // |x(hi)| <= radius
-  double nu = a_min + lo > 0.0 ? lo : 0.5 * (lo + hi);  // a pole at lo: start inside
+  double hi = std::max(lo, shift - a_min);                     // |x(hi)| <= radius
+  double nu = a_min + lo > 0.0 ? lo : 0.5 * (lo + hi);         // a pole at lo: start inside
   double e0 = 1.0 / (a[0] + nu), e1 = 1.0 / (a[1] + nu);
   for (int it = 0; it < 60; ++it) {
     const double x0 = g[0] * e0, x1 = g[1] * e1;
@@ -96,7 +95,10 @@ inline Eigen::Vector2d solveDiscProblem(const Eigen::Matrix2d& basis, const Eige
     const double n = std::sqrt(n2);
     const double phi = 1.0 / n - 1.0 / radius;
     if (std::abs(phi) * radius < 1e-15) break;
-    if (phi > 0.0) hi = nu; else lo = nu;  // phi increases with ν
+    if (phi > 0.0)
+      hi = nu;
+    else
+      lo = nu;  // phi increases with ν
     const double slope = (x0 * x0 * e0 + x1 * x1 * e1) / (n2 * n);
     double next = nu - phi / slope;
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
@@ -180,7 +182,7 @@ inline void coulombLocalStep(const LocalBlock& blk, const Eigen::Vector3d& b, Ei
 // box (pyramid4) with an uncoupled diagonal D_tt this is the classical clamp
 // λ_ti = clamp(λ_ti - u_ti / D_ti, -μ λ_n, μ λ_n) of boxed PGS.
 inline void polygonLocalStep(const LocalBlock& blk, const FrictionPolygon& polygon, const double* d_c,
-                      double omega, double* lambda_c) {
+                             double omega, double* lambda_c) {
   const double old_n = lambda_c[0];
   double next_n = std::max(0.0, old_n - d_c[0] * blk.inv_nn);
   if (omega != 1.0) next_n = std::max(0.0, old_n + omega * (next_n - old_n));
@@ -208,7 +210,8 @@ inline void polygonLocalStep(const LocalBlock& blk, const FrictionPolygon& polyg
 // rolling pair as a disc problem of radius μ_roll λ_n on its 2×2 block, each on the d the
 // previous rows' changes left (u_x = d_x + D_x,prev Δ_prev) and bounded by the new λ_n. Its
 // fixed point satisfies every row's law with the others' forces: the contact's law.
-inline void extendedLocalStep(const LocalBlock& blk, double omega, const double* d_c, double* lambda_c, double* delta) {
+inline void extendedLocalStep(const LocalBlock& blk, double omega, const double* d_c, double* lambda_c,
+                              double* delta) {
   Eigen::Map<Eigen::Vector3d> sliding(lambda_c);
   const Eigen::Vector3d old = sliding;
   const Eigen::Vector3d b = Eigen::Map<const Eigen::Vector3d>(d_c) - blk.D * old;
@@ -229,7 +232,8 @@ inline void extendedLocalStep(const LocalBlock& blk, double omega, const double*
   // Spin about the normal.
   const double u_s = d_c[3] + D(3, 0) * delta[0] + D(3, 1) * delta[1] + D(3, 2) * delta[2];
   const double spin_bound = blk.mu_torsional * lambda_c[0];
-  double spin = blk.mu_torsional > 0.0 ? std::clamp(lambda_c[3] - u_s * blk.inv_spin, -spin_bound, spin_bound) : 0.0;
+  double spin =
+      blk.mu_torsional > 0.0 ? std::clamp(lambda_c[3] - u_s * blk.inv_spin, -spin_bound, spin_bound) : 0.0;
   if (omega != 1.0) spin = std::clamp(lambda_c[3] + omega * (spin - lambda_c[3]), -spin_bound, spin_bound);
   delta[3] = spin - lambda_c[3];
   lambda_c[3] = spin;
@@ -242,8 +246,9 @@ inline void extendedLocalStep(const LocalBlock& blk, double omega, const double*
   const double roll_bound = blk.mu_rolling * lambda_c[0];
   Eigen::Vector2d next_r = Eigen::Vector2d::Zero();
   if (roll_bound > 0.0) {
-    next_r = blk.roll_symmetric ? solveDiscProblem(blk.roll_basis, blk.roll_eigen, u_r - R * old_r, roll_bound)
-                                : clampToDisc(old_r - blk.roll_step * u_r, roll_bound);
+    next_r = blk.roll_symmetric
+                 ? solveDiscProblem(blk.roll_basis, blk.roll_eigen, u_r - R * old_r, roll_bound)
+                 : clampToDisc(old_r - blk.roll_step * u_r, roll_bound);
   }
   if (omega != 1.0) next_r = clampToDisc(old_r + omega * (next_r - old_r), roll_bound);
   delta[4] = next_r[0] - old_r[0];
@@ -255,10 +260,9 @@ inline void extendedLocalStep(const LocalBlock& blk, double omega, const double*
 // One contact's local step on its current d with over-relaxation ω (see the top of the
 // file); returns the change of λ_c in `delta`.
 inline void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, double omega, const double* d_c,
-               double* lambda_c, double* delta) {
+                      double* lambda_c, double* delta) {
   switch (blk.kind) {
-    case LocalKind::kSkip:
-      break;
+    case LocalKind::kSkip: break;
     case LocalKind::kNormalOnly: {
       double next = std::max(0.0, lambda_c[0] - d_c[0] * blk.inv_nn);
       if (omega != 1.0) next = std::max(0.0, lambda_c[0] + omega * (next - lambda_c[0]));
@@ -281,9 +285,7 @@ inline void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, dou
       lambda = next;
       break;
     }
-    case LocalKind::kCoulombExtended:
-      extendedLocalStep(blk, omega, d_c, lambda_c, delta);
-      break;
+    case LocalKind::kCoulombExtended: extendedLocalStep(blk, omega, d_c, lambda_c, delta); break;
     case LocalKind::kPolygon: {
       const Eigen::Vector3d old = Eigen::Map<const Eigen::Vector3d>(lambda_c);
       polygonLocalStep(blk, *polygon, d_c, omega, lambda_c);

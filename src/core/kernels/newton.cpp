@@ -129,8 +129,7 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
         nc.rho_t = inverse(0.5 * (D(1, 1) + D(2, 2)));
         break;
       case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
-      case ContactType::kRolling:
-        break;
+      case ContactType::kRolling: break;
     }
   }
   return contacts;
@@ -161,8 +160,7 @@ void contactFunction(const NewtonContact& nc, const double* l, const double* u, 
       return;
     case RowKind::kNormal:
     case RowKind::kFrictionalNormalOnly:
-    case RowKind::kFrictional:
-      break;
+    case RowKind::kFrictional: break;
   }
   const double s_n = l[0] - nc.rho_n * u[0];
   if (s_n > 0.0) {
@@ -227,8 +225,8 @@ class NewtonSystem {
  public:
   virtual ~NewtonSystem() = default;
   // Builds and factorises; false if the factorisation failed.
-  virtual bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
-                         double epsilon) = 0;
+  virtual bool factorize(const std::vector<NewtonContact>& contacts,
+                         const std::vector<JacobianBlocks>& blocks, double epsilon) = 0;
   virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
 };
 
@@ -243,7 +241,8 @@ class DenseSystem : public NewtonSystem {
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       const NewtonContact& nc = contacts[i];
       const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> A(
-          blocks[i].A, nc.rows, nc.rows), B(blocks[i].B, nc.rows, nc.rows);
+          blocks[i].A, nc.rows, nc.rows),
+          B(blocks[i].B, nc.rows, nc.rows);
       J_.middleRows(nc.offset, nc.rows).noalias() = B * W_.middleRows(nc.offset, nc.rows);
       J_.block(nc.offset, nc.offset, nc.rows, nc.rows) += A;
     }
@@ -283,13 +282,15 @@ class SparseSystem : public NewtonSystem {
       for (int s = W.row_start[bi]; s < W.row_start[bi + 1]; ++s) {
         const int bj = W.block_col[s];
         for (int r = W.block_offset[bi]; r < W.block_offset[bi + 1]; ++r)
-          for (int c = W.block_offset[bj]; c < W.block_offset[bj + 1]; ++c) block_positions_[s].push_back(position(r, c));
+          for (int c = W.block_offset[bj]; c < W.block_offset[bj + 1]; ++c)
+            block_positions_[s].push_back(position(r, c));
       }
     }
     diagonal_positions_.resize(nb);
     for (int bi = 0; bi < nb; ++bi)
       for (int r = W.block_offset[bi]; r < W.block_offset[bi + 1]; ++r)
-        for (int c = W.block_offset[bi]; c < W.block_offset[bi + 1]; ++c) diagonal_positions_[bi].push_back(position(r, c));
+        for (int c = W.block_offset[bi]; c < W.block_offset[bi + 1]; ++c)
+          diagonal_positions_[bi].push_back(position(r, c));
     lu_.analyzePattern(J_);
   }
 
@@ -403,7 +404,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   double c_reg = kRegularizationStart;
   int newton_steps = 0;
   int sweeps = warm_sweeps;
-  bool nlgs_usable = warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
+  bool nlgs_usable =
+      warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   SolverParams burst_params = warm_params;
@@ -424,7 +426,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (newton_steps + sweeps >= params.maxIt) {
       report.message = "maxIt (" + std::to_string(params.maxIt) + ") iterations (" + std::to_string(sweeps) +
-                       " nlgs sweeps, " + std::to_string(newton_steps) + " Newton steps) reached before the tolerance";
+                       " nlgs sweeps, " + std::to_string(newton_steps) +
+                       " Newton steps) reached before the tolerance";
       break;
     }
     if (newton_steps > 0 && ctx.deadlinePassed()) {
@@ -464,7 +467,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     ++since_checkpoint;
     ++newton_steps;
     const double merit = evaluate(contacts, lambda, u, phi, &blocks);
-    const double epsilon = std::clamp(c_reg * std::min(1.0, residual), kRegularizationMin, kRegularizationMax);
+    const double epsilon =
+        std::clamp(c_reg * std::min(1.0, residual), kRegularizationMin, kRegularizationMax);
     bool stepped = false;
     if (system->factorize(contacts, blocks, epsilon)) {
       rhs = -phi;
@@ -500,7 +504,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   if (!lambda.allFinite() || report.status != SolveStatus::kConverged) lambda = best;
   report.iterations = symmetric_steps + sweeps + newton_steps;
   if (report.message.empty())
-    report.message = std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";
+    report.message =
+        std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";
   report.solver_error = ctx.residual(lambda);
   return report;
 }

@@ -133,7 +133,9 @@ class DenseReduced : public ReducedSystem {
   void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
     u.noalias() = Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_) * lambda;
   }
-  Eigen::VectorXd diagonal() const override { return Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_).diagonal(); }
+  Eigen::VectorXd diagonal() const override {
+    return Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_).diagonal();
+  }
 
  private:
   DenseScratch& s_;
@@ -161,7 +163,9 @@ class SparseReduced : public ReducedSystem {
     return ldlt_.info() == Eigen::Success && ldlt_.vectorD().minCoeff() > 0.0;
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override { x = ldlt_.solve(rhs); }
-  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override { u.noalias() = S_ * lambda; }
+  void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
+    u.noalias() = S_ * lambda;
+  }
   Eigen::VectorXd diagonal() const override { return S_.diagonal(); }
 
  private:
@@ -175,7 +179,8 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
   const auto* blocks = std::get_if<BlockSparseMatrix>(&p.W);
-  const bool dense_pattern = blocks != nullptr && 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
+  const bool dense_pattern =
+      blocks != nullptr && 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
   if (dense != nullptr || n <= kDenseMaxRows || dense_pattern) {
     auto system = std::make_unique<DenseReduced>(denseScratch(), n);
     Eigen::Map<Eigen::MatrixXd> W = system->W();
@@ -295,7 +300,8 @@ bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, K
     if (residual <= params.tolerance) {
       report->status = SolveStatus::kConverged;
       report->solver_error = residual;
-      report->message = "active-set Newton on symmetric W (Cholesky): " + std::to_string(report->iterations) + " steps";
+      report->message =
+          "active-set Newton on symmetric W (Cholesky): " + std::to_string(report->iterations) + " steps";
       return true;
     }
     if (next == active) break;  // the set is right but the tolerance is out of reach

@@ -92,8 +92,8 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   int iterations = 0, outer = 0, failures = 0;
   for (;;) {
     if (iterations >= params.maxIt) {
-      report.message = "prox: maxIt (" + std::to_string(params.maxIt) + ") iterations over " + std::to_string(outer) +
-                       " proximal steps reached before the tolerance";
+      report.message = "prox: maxIt (" + std::to_string(params.maxIt) + ") iterations over " +
+                       std::to_string(outer) + " proximal steps reached before the tolerance";
       break;
     }
     if (outer >= kMaxOuterSteps) {
@@ -128,7 +128,8 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (step.status == SolveStatus::kTimeBudget) {
       report.status = SolveStatus::kTimeBudget;
-      report.message = "prox: time budget ran out in proximal step " + std::to_string(outer) + "; best iterate returned";
+      report.message =
+          "prox: time budget ran out in proximal step " + std::to_string(outer) + "; best iterate returned";
       break;
     }
     const bool solved = step.status == SolveStatus::kConverged;
@@ -141,8 +142,8 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (next > residual) lambda = best;
       if (sigma >= kSigmaMax * scale) {
         report.status = SolveStatus::kNumericalFailure;
-        report.message = "prox: no progress even with the largest proximal weight after " + std::to_string(outer) +
-                         " steps; best iterate returned";
+        report.message = "prox: no progress even with the largest proximal weight after " +
+                         std::to_string(outer) + " steps; best iterate returned";
         break;
       }
       sigma *= 10.0;
@@ -152,7 +153,8 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   if (report.status != SolveStatus::kConverged) lambda = best;
   report.iterations = iterations;
   if (report.message.empty())
-    report.message = std::to_string(outer) + " proximal steps (" + std::to_string(failures) + " sub-problems unsolved)";
+    report.message =
+        std::to_string(outer) + " proximal steps (" + std::to_string(failures) + " sub-problems unsolved)";
   report.solver_error = ctx.residual(lambda);
   return report;
 }

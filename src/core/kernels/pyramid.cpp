@@ -23,8 +23,14 @@ FrictionPolygon makeFrictionPolygon(FrictionModel model) {
   const double vertex_radius = 1.0 / std::cos(0.5 * step);
   for (int k = 0; k < polygon.facets; ++k) {
     // Exact values on the axes (cos(π/2) is not 0 in floating point).
-    auto cosine = [&](double angle) { const double c = std::cos(angle); return std::abs(c) < 1e-15 ? 0.0 : c; };
-    auto sine = [&](double angle) { const double s = std::sin(angle); return std::abs(s) < 1e-15 ? 0.0 : s; };
+    auto cosine = [&](double angle) {
+      const double c = std::cos(angle);
+      return std::abs(c) < 1e-15 ? 0.0 : c;
+    };
+    auto sine = [&](double angle) {
+      const double s = std::sin(angle);
+      return std::abs(s) < 1e-15 ? 0.0 : s;
+    };
     const double a = k * step;
     polygon.normal[k][0] = cosine(a);
     polygon.normal[k][1] = sine(a);
@@ -57,7 +63,8 @@ Eigen::Vector2d minimizeOverPolygon(const FrictionPolygon& polygon, const Eigen:
   const double det = T(0, 0) * T(1, 1) - T(0, 1) * T(1, 0);
   const double scale = T.cwiseAbs().maxCoeff();
   if (T(0, 0) > 0.0 && det > 1e-14 * scale * scale) {
-    const Eigen::Vector2d x((-T(1, 1) * b[0] + T(0, 1) * b[1]) / det, (T(1, 0) * b[0] - T(0, 0) * b[1]) / det);
+    const Eigen::Vector2d x((-T(1, 1) * b[0] + T(0, 1) * b[1]) / det,
+                            (T(1, 0) * b[0] - T(0, 0) * b[1]) / det);
     if (insidePolygon(polygon, x, R)) return x;
   } else if (b[0] == 0.0 && b[1] == 0.0) {
     return Eigen::Vector2d::Zero();  // singular T without drive: 0 is a minimiser
@@ -74,8 +81,10 @@ Eigen::Vector2d minimizeOverPolygon(const FrictionPolygon& polygon, const Eigen:
     const double g = e.dot(Tp0 + b);
     const double c = e.dot(Te);
     double tau;
-    if (c > 0.0) tau = std::clamp(-g / c, -limit, limit);
-    else tau = g > 0.0 ? -limit : limit;
+    if (c > 0.0)
+      tau = std::clamp(-g / c, -limit, limit);
+    else
+      tau = g > 0.0 ? -limit : limit;
     const double value = 0.5 * p0.dot(Tp0) + b.dot(p0) + tau * g + 0.5 * c * tau * tau;
     if (value < best_value) {
       best_value = value;
@@ -91,9 +100,9 @@ Eigen::Vector2d projectOntoPolygon(const FrictionPolygon& polygon, const Eigen::
   return minimizeOverPolygon(polygon, Eigen::Matrix2d::Identity(), -y, R);
 }
 
-double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
-                       const FrictionPolygon& polygon, const Eigen::VectorXd& lambda,
-                       const Eigen::VectorXd& d, const std::vector<bool>& ignored) {
+double pyramidResidual(const Problem& problem, const std::vector<double>& mu, const FrictionPolygon& polygon,
+                       const Eigen::VectorXd& lambda, const Eigen::VectorXd& d,
+                       const std::vector<bool>& ignored) {
   double sum = 0.0;
   int row = 0;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
@@ -120,8 +129,7 @@ double pyramidResidual(const Problem& problem, const std::vector<double>& mu,
         for (int k = 0; k < c.rows; ++k) sum += u[k] * u[k];
         break;
       case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
-      case ContactType::kRolling:
-        break;
+      case ContactType::kRolling: break;
     }
   }
   const double q_norm = problem.d_free.stableNorm();
@@ -196,7 +204,8 @@ KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     const int jn = addVariable({{off, 1.0}});
     if (contact.type != ContactType::kFrictional || ctx.mu[c] == 0.0) continue;
     const int first_beta = static_cast<int>(columns.size());
-    for (int k = 0; k < m; ++k) addVariable({{off + 1, polygon.vertex[k][0]}, {off + 2, polygon.vertex[k][1]}});
+    for (int k = 0; k < m; ++k)
+      addVariable({{off + 1, polygon.vertex[k][0]}, {off + 2, polygon.vertex[k][1]}});
     const int jg = addVariable({});
     couplings.push_back({jg, jn, ctx.mu[c]});
     for (int k = 0; k < m; ++k) {
@@ -263,8 +272,9 @@ KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     report.status = SolveStatus::kTimeBudget;
     report.friction_model = params.friction_model;
     report.solver_error = ctx.residual(lambda);
-    report.message = "the time budget ran out while building the " + std::string(frictionModelName(params.friction_model)) +
-                     " friction LCP (" + std::to_string(N) + " variables); forces are zero";
+    report.message = "the time budget ran out while building the " +
+                     std::string(frictionModelName(params.friction_model)) + " friction LCP (" +
+                     std::to_string(N) + " variables); forces are zero";
     return report;
   }
   KernelReport report = runLemke(sub, z);
@@ -282,13 +292,14 @@ KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // Exact in exact arithmetic, but hundreds of pivots on an ill-conditioned W lose
     // digits: say so rather than claim the tolerance.
     report.status = SolveStatus::kNumericalFailure;
-    report.message = "Lemke's final basis leaves a pyramid residual of " + std::to_string(report.solver_error) +
-                     " > tolerance (round-off over " + std::to_string(report.iterations) +
-                     " pivots); the forces are that basic solution";
+    report.message = "Lemke's final basis leaves a pyramid residual of " +
+                     std::to_string(report.solver_error) + " > tolerance (round-off over " +
+                     std::to_string(report.iterations) + " pivots); the forces are that basic solution";
   }
   if (report.status == SolveStatus::kRayTermination) {
-    report.message += "; with a rank-deficient W (more contact rows than body freedoms) a small "
-                      "regularizationTerm (e.g. 1e-8 of W's scale) usually avoids this";
+    report.message +=
+        "; with a rank-deficient W (more contact rows than body freedoms) a small "
+        "regularizationTerm (e.g. 1e-8 of W's scale) usually avoids this";
   }
   const std::string note = "Lemke solved the " + std::string(frictionModelName(params.friction_model)) +
                            " friction LCP (" + std::to_string(N) + " variables)";

@@ -17,7 +17,6 @@
 
 namespace lcp_contact_solver::core::local_laws {
 
-
 // Current d of one contact. Dense W: read from the maintained d. Block-sparse W: one block
 // row times λ (the CSR layout makes this a contiguous walk).
 struct DenseAccess {
@@ -50,9 +49,9 @@ struct SparseAccess {
   const SolveContext& ctx;
   Eigen::VectorXd d;
   struct ColumnBlock {
-    int row0;        // first row of the block row
-    int rows;        // its height
-    const double* v; // the block's values
+    int row0;         // first row of the block row
+    int rows;         // its height
+    const double* v;  // the block's values
   };
   std::vector<int> column_start;           // per block column, into `column_blocks`
   std::vector<ColumnBlock> column_blocks;  // blocks ordered by block column

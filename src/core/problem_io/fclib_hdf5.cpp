@@ -27,7 +27,6 @@ namespace {
 
 using namespace problem_files;
 
-
 // HDF5 prints a stack of diagnostics on stderr for every failed call (a corrupt or
 // truncated file); we report one line ourselves instead. Restores the previous handler.
 class QuietHdf5Errors {
@@ -120,8 +119,8 @@ class FclibPreflight {
     const long long actual_points = H5Sget_simple_extent_npoints(space.get());
     if (actual_points < 0) fail(path_, name + " has an unreadable size");
     if (points >= 0 && actual_points != points)
-      fail(path_, name + " has " + std::to_string(actual_points) + " entries, " +
-                      std::to_string(points) + " expected");
+      fail(path_, name + " has " + std::to_string(actual_points) + " entries, " + std::to_string(points) +
+                      " expected");
     return actual_points;
   }
 
@@ -145,8 +144,8 @@ class FclibPreflight {
     const int n = readScalarInt(group + "/n");
     const int nz = readScalarInt(group + "/nz");
     if (m <= 0 || n <= 0 || m > kMaxRows || n > kMaxRows)
-      fail(path_, group + " is " + std::to_string(m) + "x" + std::to_string(n) +
-                      ", sizes must be in 1.." + std::to_string(kMaxRows));
+      fail(path_, group + " is " + std::to_string(m) + "x" + std::to_string(n) + ", sizes must be in 1.." +
+                      std::to_string(kMaxRows));
     if (m != n) fail(path_, group + " is not square (" + std::to_string(m) + "x" + std::to_string(n) + ")");
     if (m % 3 != 0) fail(path_, group + " has " + std::to_string(m) + " rows, not a multiple of 3");
     if (nzmax < 0 || static_cast<long long>(nzmax) > static_cast<long long>(m) * n)
@@ -208,7 +207,10 @@ void forEachEntry(const std::string& path, const fclib_matrix& W, Visit visit) {
     for (int k = W.p[o]; k < W.p[o + 1]; ++k) {
       const int in = W.i[k];
       if (in < 0 || in >= inner) fail(path, "W index " + std::to_string(in) + " is out of range");
-      if (by_column) visit(in, o, W.x[k]); else visit(o, in, W.x[k]);
+      if (by_column)
+        visit(in, o, W.x[k]);
+      else
+        visit(o, in, W.x[k]);
     }
   }
 }
@@ -216,12 +218,12 @@ void forEachEntry(const std::string& path, const fclib_matrix& W, Visit visit) {
 Problem fromFclib(const std::string& path, const fclib_local& local) {
   if (local.spacedim != 3)
     fail(path, "FCLIB problem in dimension " + std::to_string(local.spacedim) + ", only 3 is supported");
-  if (local.V || local.R)
-    fail(path, "FCLIB mixed problems (V, R) are not supported");
+  if (local.V || local.R) fail(path, "FCLIB mixed problems (V, R) are not supported");
   if (!local.W || !local.q || !local.mu) fail(path, "FCLIB problem lacks W, q or mu");
   const fclib_matrix& W = *local.W;
   if (W.m != W.n) fail(path, "W is not square (" + std::to_string(W.m) + "x" + std::to_string(W.n) + ")");
-  if (W.m <= 0 || W.m % 3 != 0) fail(path, "W has " + std::to_string(W.m) + " rows, a positive multiple of 3 expected");
+  if (W.m <= 0 || W.m % 3 != 0)
+    fail(path, "W has " + std::to_string(W.m) + " rows, a positive multiple of 3 expected");
   if (W.m > kMaxRows) fail(path, "W has " + std::to_string(W.m) + " rows, too many");
   if (W.nzmax < 0) fail(path, "W has a negative capacity");
 

@@ -1,7 +1,7 @@
 #include "problem_files.h"
 
-#include <cerrno>
 #include <cctype>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -15,15 +15,12 @@ namespace problem_files {
   throw ProblemFileError(path + ": " + fault);
 }
 
-std::string baseName(const std::string& path) {
-  return std::filesystem::path(path).filename().string();
-}
+std::string baseName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
 std::string printable(std::string_view token) {
   constexpr std::size_t kMaxShown = 24;
   std::string shown;
-  for (char ch : token.substr(0, kMaxShown))
-    shown += std::isprint(static_cast<unsigned char>(ch)) ? ch : '?';
+  for (char ch : token.substr(0, kMaxShown)) shown += std::isprint(static_cast<unsigned char>(ch)) ? ch : '?';
   if (token.size() > kMaxShown) shown += "...";
   return shown;
 }
@@ -35,8 +32,7 @@ void checkReadableFile(const std::string& path) {
   if (std::filesystem::is_directory(status)) fail(path, "cannot read: is a directory");
   if (std::filesystem::is_regular_file(status)) {
     const auto size = std::filesystem::file_size(path, ec);
-    if (!ec && size > kMaxFileBytes)
-      fail(path, "file is too large (" + std::to_string(size) + " bytes)");
+    if (!ec && size > kMaxFileBytes) fail(path, "file is too large (" + std::to_string(size) + " bytes)");
   }
 }
 
@@ -61,8 +57,7 @@ bool hasHdf5Signature(const std::string& path) {
 }
 
 void requireValid(const std::string& path, const Problem& problem) {
-  if (const std::string fault = validateProblem(problem, kMaxRows); !fault.empty())
-    fail(path, fault);
+  if (const std::string fault = validateProblem(problem, kMaxRows); !fault.empty()) fail(path, fault);
 }
 
 }  // namespace problem_files

@@ -22,12 +22,10 @@ namespace {
 
 using namespace problem_files;
 
-
 // Reads whitespace-separated numbers one by one, remembering the line for messages.
 class TokenReader {
  public:
-  TokenReader(std::string path, std::string content)
-      : path_(std::move(path)), content_(std::move(content)) {}
+  TokenReader(std::string path, std::string content) : path_(std::move(path)), content_(std::move(content)) {}
 
   const std::string& path() const { return path_; }
 
@@ -40,8 +38,8 @@ class TokenReader {
     const long long value = readInt(what);
     if (value < 0) failHere(what + " is negative (" + std::to_string(value) + ")");
     if (value > max)
-      failHere(what + " is too large (" + std::to_string(value) + ", at most " +
-               std::to_string(max) + " allowed)");
+      failHere(what + " is too large (" + std::to_string(value) + ", at most " + std::to_string(max) +
+               " allowed)");
     return value;
   }
 
@@ -71,8 +69,8 @@ class TokenReader {
   void requireAvailable(long long count, const std::string& what) const {
     const long long bytes_left = static_cast<long long>(content_.size() - pos_);
     if (count > (bytes_left + 1) / 2)
-      fail(path_, "truncated: " + what + " needs " + std::to_string(count) +
-                      " numbers but only " + std::to_string(bytes_left) + " bytes remain");
+      fail(path_, "truncated: " + what + " needs " + std::to_string(count) + " numbers but only " +
+                      std::to_string(bytes_left) + " bytes remain");
   }
 
  private:
@@ -120,8 +118,7 @@ MatrixHeader readMatrixHeader(TokenReader& in) {
   MatrixHeader header;
   const long long storage = in.readInt("the matrix storage");
   if (storage != 0 && storage != 1)
-    in.failHere("unknown matrix storage " + std::to_string(storage) +
-                " (0 dense, 1 sparse block expected)");
+    in.failHere("unknown matrix storage " + std::to_string(storage) + " (0 dense, 1 sparse block expected)");
   header.storage = static_cast<int>(storage);
   header.rows = static_cast<int>(in.readSize("the matrix row count", kMaxRows));
   header.cols = static_cast<int>(in.readSize("the matrix column count", kMaxRows));
@@ -134,15 +131,13 @@ Eigen::MatrixXd readDenseValues(TokenReader& in, const MatrixHeader& header) {
   const long long cols = in.readSize("the dense matrix column count", kMaxRows);
   if (rows != header.rows || cols != header.cols)
     in.failHere("dense matrix is " + std::to_string(rows) + "x" + std::to_string(cols) +
-                " but its header says " + std::to_string(header.rows) + "x" +
-                std::to_string(header.cols));
+                " but its header says " + std::to_string(header.rows) + "x" + std::to_string(header.cols));
   in.requireAvailable(rows * cols, "the dense matrix");
   Eigen::MatrixXd matrix(rows, cols);
   // Column-major: the file prints one column per line.
   for (long long c = 0; c < cols; ++c)
     for (long long r = 0; r < rows; ++r)
-      matrix(r, c) = in.readDouble("matrix entry (" + std::to_string(r) + ", " +
-                                   std::to_string(c) + ")");
+      matrix(r, c) = in.readDouble("matrix entry (" + std::to_string(r) + ", " + std::to_string(c) + ")");
   return matrix;
 }
 
@@ -158,8 +153,8 @@ std::vector<int> readBlockEnds(TokenReader& in, long long count, int total, cons
     offset.push_back(static_cast<int>(end));
   }
   if (offset.back() != total)
-    in.failHere(std::string(what) + " end at " + std::to_string(offset.back()) +
-                ", the matrix has " + std::to_string(total));
+    in.failHere(std::string(what) + " end at " + std::to_string(offset.back()) + ", the matrix has " +
+                std::to_string(total));
   return offset;
 }
 
@@ -200,8 +195,7 @@ SiconosBlockMatrix readSparseBlockValues(TokenReader& in, const MatrixHeader& he
     m.block_col.push_back(static_cast<int>(col));
   }
   for (long long br = 0; br < block_rows; ++br) {
-    std::vector<int> cols(m.block_col.begin() + m.row_start[br],
-                          m.block_col.begin() + m.row_start[br + 1]);
+    std::vector<int> cols(m.block_col.begin() + m.row_start[br], m.block_col.begin() + m.row_start[br + 1]);
     std::sort(cols.begin(), cols.end());
     if (std::adjacent_find(cols.begin(), cols.end()) != cols.end())
       in.failHere("block row " + std::to_string(br) + " stores the same block column twice");
@@ -211,15 +205,13 @@ SiconosBlockMatrix readSparseBlockValues(TokenReader& in, const MatrixHeader& he
     const int rows = m.row_offset[br + 1] - m.row_offset[br];
     for (int k = m.row_start[br]; k < m.row_start[br + 1]; ++k) {
       const long long index = in.readInt("block index");
-      if (index != k)
-        in.failHere("block " + std::to_string(k) + " is labelled " + std::to_string(index));
+      if (index != k) in.failHere("block " + std::to_string(k) + " is labelled " + std::to_string(index));
       const int bc = m.block_col[k];
       const int cols = m.col_offset[bc + 1] - m.col_offset[bc];
       in.requireAvailable(static_cast<long long>(rows) * cols, "block " + std::to_string(k));
       Eigen::MatrixXd block(rows, cols);
       for (int c = 0; c < cols; ++c)  // column-major
-        for (int r = 0; r < rows; ++r)
-          block(r, c) = in.readDouble("a value of block " + std::to_string(k));
+        for (int r = 0; r < rows; ++r) block(r, c) = in.readDouble("a value of block " + std::to_string(k));
       m.blocks.push_back(std::move(block));
     }
   }
@@ -231,8 +223,7 @@ Eigen::MatrixXd toDense(const SiconosBlockMatrix& m) {
   for (std::size_t br = 0; br + 1 < m.row_offset.size(); ++br)
     for (int k = m.row_start[br]; k < m.row_start[br + 1]; ++k) {
       const int bc = m.block_col[k];
-      dense.block(m.row_offset[br], m.col_offset[bc], m.blocks[k].rows(), m.blocks[k].cols()) =
-          m.blocks[k];
+      dense.block(m.row_offset[br], m.col_offset[bc], m.blocks[k].rows(), m.blocks[k].cols()) = m.blocks[k];
     }
   return dense;
 }
@@ -260,9 +251,8 @@ Eigen::VectorXd readVector(TokenReader& in, long long size, const char* name) {
 
 void requireSquare(TokenReader& in, const MatrixHeader& header, long long rows) {
   if (header.rows != rows || header.cols != rows)
-    in.failHere("the matrix is " + std::to_string(header.rows) + "x" +
-                std::to_string(header.cols) + ", " + std::to_string(rows) + "x" +
-                std::to_string(rows) + " expected");
+    in.failHere("the matrix is " + std::to_string(header.rows) + "x" + std::to_string(header.cols) + ", " +
+                std::to_string(rows) + "x" + std::to_string(rows) + " expected");
 }
 
 Problem readLcp(TokenReader& in) {
@@ -274,8 +264,8 @@ Problem readLcp(TokenReader& in) {
   if (header.storage == 1 && n > kMaxDenseLcpRows)
     in.failHere("sparse LCP of size " + std::to_string(n) + " is too large to convert to dense (at most " +
                 std::to_string(kMaxDenseLcpRows) + ")");
-  Eigen::MatrixXd M = header.storage == 0 ? readDenseValues(in, header)
-                                          : toDense(readSparseBlockValues(in, header));
+  Eigen::MatrixXd M =
+      header.storage == 0 ? readDenseValues(in, header) : toDense(readSparseBlockValues(in, header));
   const Eigen::VectorXd q = readVector(in, n, "q");
   return makeLcpProblem(M, q);
 }

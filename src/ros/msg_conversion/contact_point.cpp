@@ -17,7 +17,8 @@ constexpr double kOrthogonalityTolerance = 1e-3;
 
 // toMsgType / fromMsgType are casts because the numbers agree; this keeps them agreeing.
 static_assert(static_cast<int>(lcs::core::ContactType::kFrictional) == lcs::ContactPoint::FRICTIONAL &&
-                  static_cast<int>(lcs::core::ContactType::kFrictionless) == lcs::ContactPoint::FRICTIONLESS &&
+                  static_cast<int>(lcs::core::ContactType::kFrictionless) ==
+                      lcs::ContactPoint::FRICTIONLESS &&
                   static_cast<int>(lcs::core::ContactType::kBilateral) == lcs::ContactPoint::BILATERAL &&
                   static_cast<int>(lcs::core::ContactType::kTorsional) == lcs::ContactPoint::TORSIONAL &&
                   static_cast<int>(lcs::core::ContactType::kRolling) == lcs::ContactPoint::ROLLING,

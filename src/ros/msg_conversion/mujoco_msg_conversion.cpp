@@ -17,7 +17,8 @@ using lcp_contact_solver::ContactPoint;
 
 // ---- messages -------------------------------------------------------------------------------
 
-lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& problem, const scene::MujocoWorld& world,
+lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& problem,
+                                                   const scene::MujocoWorld& world,
                                                    const std_msgs::Header& header) {
   std::vector<ContactFrame> frames(problem.entries.size());
   std::vector<ContactBodies> bodies(problem.entries.size());
@@ -43,32 +44,35 @@ lcp_contact_solver::ContactArray toContactArrayMsg(const scene::MujocoProblem& p
   return msg;
 }
 
-lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& problem, const std_msgs::Header& header) {
+lcp_contact_solver::Compliance toComplianceMsg(const scene::MujocoProblem& problem,
+                                               const std_msgs::Header& header) {
   lcp_contact_solver::Compliance msg = toComplianceMsg(problem.problem.W);
   msg.header = header;
   return msg;
 }
 
-std::string toReferenceForcesMsg(const scene::MujocoProblem& problem, const lcp_contact_solver::ContactArray& contacts,
+std::string toReferenceForcesMsg(const scene::MujocoProblem& problem,
+                                 const lcp_contact_solver::ContactArray& contacts,
                                  const lcp_contact_solver::Compliance& compliance,
                                  lcp_contact_solver::ConstraintForces* forces) {
   lcs::core::Problem read;
   std::vector<ContactFrame> frames;
   if (std::string error = toProblem(contacts, compliance, 0, &read, &frames); !error.empty()) return error;
   if (read.rowCount() != problem.mujoco_lambda.size())
-    return std::to_string(problem.mujoco_lambda.size()) + " MuJoCo forces for " + std::to_string(read.rowCount()) +
-           " rows";
+    return std::to_string(problem.mujoco_lambda.size()) + " MuJoCo forces for " +
+           std::to_string(read.rowCount()) + " rows";
   lcs::core::SolveResult mujoco;
   mujoco.forces = problem.mujoco_lambda;
   // Every contact of the bridge carries its own mu (pyramid edges and limits none): the
   // default is never used.
-  mujoco.states = lcs::core::classifyContacts(read, lcs::core::effectiveMu(read, lcs::core::SolverParams().mu), mujoco.forces);
+  mujoco.states = lcs::core::classifyContacts(
+      read, lcs::core::effectiveMu(read, lcs::core::SolverParams().mu), mujoco.forces);
   *forces = toConstraintForcesMsg(contacts, frames, read, mujoco);
   return "";
 }
 
-std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, const scene::MujocoProblem& problem,
-                            Eigen::VectorXd* lambda) {
+std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces,
+                            const scene::MujocoProblem& problem, Eigen::VectorXd* lambda) {
   const std::size_t n = problem.problem.contacts.size();
   if (forces.forces.size() != n)
     return std::to_string(forces.forces.size()) + " forces for " + std::to_string(n) + " contacts";
@@ -81,8 +85,8 @@ std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, 
              std::to_string(problem.problem.contacts[i].id);
     const int rows = offsets[i + 1] - offsets[i];
     if (static_cast<int>(f.lambda.size()) != rows)
-      return "force " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) + " rows, the contact " +
-             std::to_string(rows);
+      return "force " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) +
+             " rows, the contact " + std::to_string(rows);
     for (int r = 0; r < rows; ++r) {
       if (!std::isfinite(f.lambda[r])) return "force " + std::to_string(i) + " is not finite";
       (*lambda)[offsets[i] + r] = f.lambda[r];
@@ -90,6 +94,5 @@ std::string toProblemForces(const lcp_contact_solver::ConstraintForces& forces, 
   }
   return "";
 }
-
 
 }  // namespace lcp_contact_solver_ros

@@ -45,9 +45,7 @@ int contactRows(const lcs::ContactPoint& c, std::string* error) {
         return -1;
       }
       return static_cast<int>(c.rows);
-    default:
-      *error = "has an unknown type " + std::to_string(c.type);
-      return -1;
+    default: *error = "has an unknown type " + std::to_string(c.type); return -1;
   }
 }
 
@@ -60,7 +58,8 @@ std::string checkMu(double mu) {
 
 std::string checkStabilization(const lcs::ContactPoint& msg) {
   if (!std::isfinite(msg.gap)) return "has a non-finite gap";
-  if (!std::isfinite(msg.erp) || (msg.erp != lcs::ContactPoint::USE_DEFAULT && (msg.erp < 0.0 || msg.erp > 1.0)))
+  if (!std::isfinite(msg.erp) ||
+      (msg.erp != lcs::ContactPoint::USE_DEFAULT && (msg.erp < 0.0 || msg.erp > 1.0)))
     return "has erp " + std::to_string(msg.erp) + " outside [0, 1] (use USE_DEFAULT=-1 for the node's erp)";
   if (!std::isfinite(msg.softness) || (msg.softness != lcs::ContactPoint::USE_DEFAULT && msg.softness < 0.0))
     return "has a negative or non-finite softness " + std::to_string(msg.softness) +
@@ -73,7 +72,8 @@ std::string toCoreContact(const lcs::ContactPoint& msg, lcs::core::Contact* cont
   const int rows = contactRows(msg, &error);
   if (rows < 0) return error;
   if (static_cast<int>(msg.d_free.size()) != rows)
-    return "has " + std::to_string(msg.d_free.size()) + " d_free values for " + std::to_string(rows) + " rows";
+    return "has " + std::to_string(msg.d_free.size()) + " d_free values for " + std::to_string(rows) +
+           " rows";
   error = checkMu(msg.mu);
   if (error.empty() && (!std::isfinite(msg.mu_torsional) || msg.mu_torsional < 0.0))
     error = "has a negative or non-finite mu_torsional";
@@ -116,12 +116,14 @@ std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::core::
     const lcs::ContactPoint& c = msg.contacts[i];
     std::string error = toCoreContact(c, &problem->contacts[i]);
     if (error.empty()) error = toContactFrame(c, &(*frames)[i]);
-    if (error.empty() && repeats && !ids.insert(c.id).second) error = "repeats an id used by an earlier contact";
+    if (error.empty() && repeats && !ids.insert(c.id).second)
+      error = "repeats an id used by an earlier contact";
     if (!error.empty()) return contactName(i, c.id) + " " + error;
     rows += problem->contacts[i].rows;
   }
   if (rows > limit)
-    return "the contacts have " + std::to_string(rows) + " rows, more than the limit of " + std::to_string(limit);
+    return "the contacts have " + std::to_string(rows) + " rows, more than the limit of " +
+           std::to_string(limit);
   problem->d_free.resize(rows);
   double* out = problem->d_free.data();
   for (const lcs::ContactPoint& c : msg.contacts) out = std::copy(c.d_free.begin(), c.d_free.end(), out);
@@ -131,8 +133,8 @@ std::string readContacts(const lcs::ContactArray& msg, int max_rows, lcs::core::
 std::string readDense(const lcs::Compliance& msg, int rows, lcs::core::ComplianceMatrix* W) {
   const std::size_t expected = static_cast<std::size_t>(rows) * static_cast<std::size_t>(rows);
   if (msg.data.size() != expected)
-    return "dense compliance has " + std::to_string(msg.data.size()) + " values, " +
-           std::to_string(rows) + "x" + std::to_string(rows) + " expected";
+    return "dense compliance has " + std::to_string(msg.data.size()) + " values, " + std::to_string(rows) +
+           "x" + std::to_string(rows) + " expected";
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   *W = Eigen::MatrixXd(Eigen::Map<const RowMajor>(msg.data.data(), rows, rows));
   return "";
@@ -169,8 +171,8 @@ std::string readBlockSparse(const lcs::Compliance& msg, const std::vector<int>& 
     std::sort(order.begin(), order.end(), [&key](std::size_t a, std::size_t b) { return key(a) < key(b); });
     for (std::size_t k = 1; k < blocks; ++k)
       if (key(order[k - 1]) == key(order[k]))
-        return "block (" + std::to_string(msg.block_rows[order[k]]) + ", " + std::to_string(msg.block_cols[order[k]]) +
-               ") is given twice";
+        return "block (" + std::to_string(msg.block_rows[order[k]]) + ", " +
+               std::to_string(msg.block_cols[order[k]]) + ") is given twice";
   }
   if (msg.block_data.size() != start[blocks])
     return "block-sparse compliance has " + std::to_string(msg.block_data.size()) +
@@ -225,20 +227,23 @@ std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offse
       const std::int32_t b = msg.contact_bodies[2 * i + s];
       if (b < -1 || (b >= 0 && static_cast<std::size_t>(b) >= nb))
         return "the body form's contact " + std::to_string(i) + " names " + (s == 0 ? "body_a " : "body_b ") +
-               std::to_string(b) + ", outside -1.." + std::to_string(static_cast<long long>(nb) - 1) + " (-1 = static)";
+               std::to_string(b) + ", outside -1.." + std::to_string(static_cast<long long>(nb) - 1) +
+               " (-1 = static)";
       if (b >= 0) jacobian_values += static_cast<std::size_t>(offsets[i + 1] - offsets[i]) * 6;
     }
   }
   if (msg.jacobian.size() != jacobian_values)
-    return "the body form has " + std::to_string(msg.jacobian.size()) + " jacobian values, its contacts need " +
-           std::to_string(jacobian_values) + " (rows x 6 per side with a body)";
+    return "the body form has " + std::to_string(msg.jacobian.size()) +
+           " jacobian values, its contacts need " + std::to_string(jacobian_values) +
+           " (rows x 6 per side with a body)";
   if (!msg.body_diagonal.empty() && msg.body_diagonal.size() != static_cast<std::size_t>(offsets.back()))
     return "the body form has " + std::to_string(msg.body_diagonal.size()) + " body_diagonal values, " +
            std::to_string(offsets.back()) + " rows (or none) expected";
   auto bodies = std::make_shared<lcs::core::BodyCompliance>();
   bodies->body_compliance.resize(nb);
   using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
-  for (std::size_t b = 0; b < nb; ++b) bodies->body_compliance[b] = Eigen::Map<const RowMajor6>(msg.body_compliance.data() + 36 * b);
+  for (std::size_t b = 0; b < nb; ++b)
+    bodies->body_compliance[b] = Eigen::Map<const RowMajor6>(msg.body_compliance.data() + 36 * b);
   bodies->contacts.resize(nc);
   std::size_t next = 0;
   for (std::size_t i = 0; i < nc; ++i) {
@@ -259,10 +264,12 @@ std::string readBodies(const lcs::Compliance& msg, const std::vector<int>& offse
 }
 
 std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& offsets,
-                           lcs::core::ComplianceMatrix* W, std::shared_ptr<const lcs::core::BodyCompliance>* bodies) {
+                           lcs::core::ComplianceMatrix* W,
+                           std::shared_ptr<const lcs::core::BodyCompliance>* bodies) {
   const int rows = offsets.back();
   if (static_cast<std::int64_t>(msg.rows) != rows)
-    return "the compliance has rows=" + std::to_string(msg.rows) + ", the contacts have " + std::to_string(rows);
+    return "the compliance has rows=" + std::to_string(msg.rows) + ", the contacts have " +
+           std::to_string(rows);
   switch (msg.storage) {
     case lcs::Compliance::STORAGE_DENSE: return readDense(msg, rows, W);
     case lcs::Compliance::STORAGE_BLOCK_SPARSE: return readBlockSparse(msg, offsets, W);
@@ -273,12 +280,13 @@ std::string readCompliance(const lcs::Compliance& msg, const std::vector<int>& o
 
 }  // namespace
 
-std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::core::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
+std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance, int max_rows,
+                      lcs::core::Problem* problem, std::vector<ContactFrame>* frames, bool validate) {
   *problem = lcs::core::Problem();
   std::string error = readContacts(contacts, max_rows, problem, frames);
   if (error.empty()) error = readCompliance(compliance, problem->rowOffsets(), &problem->W, &problem->bodies);
-  if (error.empty() && validate) error = lcs::core::validateProblem(*problem, max_rows);  // non-finite W, d_free
+  if (error.empty() && validate)
+    error = lcs::core::validateProblem(*problem, max_rows);  // non-finite W, d_free
   problem->name = contacts.header.frame_id;
   return error;
 }

@@ -10,8 +10,10 @@
 
 namespace lcp_contact_solver_ros {
 
-lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem, const std::vector<ContactFrame>& frames,
-                                    const std::vector<ContactBodies>& bodies, const std_msgs::Header& header) {
+lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem,
+                                    const std::vector<ContactFrame>& frames,
+                                    const std::vector<ContactBodies>& bodies,
+                                    const std_msgs::Header& header) {
   lcs::ContactArray msg;
   msg.header = header;
   const std::vector<int> offsets = problem.rowOffsets();
@@ -77,8 +79,10 @@ lcs::Compliance toComplianceMsg(const lcs::core::Problem& problem) {
   for (const lcs::core::ContactJacobian& c : bodies.contacts) {
     msg.contact_bodies.push_back(c.body_a);
     msg.contact_bodies.push_back(c.body_b);
-    if (c.body_a >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_a.data(), c.jacobian_a.data() + 6 * c.rows);
-    if (c.body_b >= 0) msg.jacobian.insert(msg.jacobian.end(), c.jacobian_b.data(), c.jacobian_b.data() + 6 * c.rows);
+    if (c.body_a >= 0)
+      msg.jacobian.insert(msg.jacobian.end(), c.jacobian_a.data(), c.jacobian_a.data() + 6 * c.rows);
+    if (c.body_b >= 0)
+      msg.jacobian.insert(msg.jacobian.end(), c.jacobian_b.data(), c.jacobian_b.data() + 6 * c.rows);
   }
   msg.body_diagonal.assign(bodies.diagonal.data(), bodies.diagonal.data() + bodies.diagonal.size());
   return msg;

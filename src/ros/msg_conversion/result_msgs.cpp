@@ -54,7 +54,8 @@ lcs::ConstraintForces toConstraintForcesMsg(const lcs::ContactArray& contacts,
     out.tangent1 = toVector3(frame.tangent1);
     out.tangent2 = toVector3(frame.tangent2);
     out.lambda.assign(lambda, lambda + contact.rows);
-    if (contact.type == lcs::core::ContactType::kTorsional || contact.type == lcs::core::ContactType::kRolling) {
+    if (contact.type == lcs::core::ContactType::kTorsional ||
+        contact.type == lcs::core::ContactType::kRolling) {
       Eigen::Vector3d torque = frame.normal * lambda[3];
       if (contact.rows == 6) torque += frame.tangent1 * lambda[4] + frame.tangent2 * lambda[5];
       out.torque = toVector3(torque);
@@ -80,7 +81,8 @@ std::vector<lcs::BodyPairWrench> sumBodyPairWrenches(const std::vector<lcs::Cont
       return *x.first == *y.first && *x.second == *y.second;
     }
   };
-  std::unordered_map<std::pair<const std::string*, const std::string*>, std::size_t, PairHash, PairEqual> index;
+  std::unordered_map<std::pair<const std::string*, const std::string*>, std::size_t, PairHash, PairEqual>
+      index;
   std::vector<Eigen::Vector3d> force_sum, torque_sum;
   std::size_t last = 0;
   for (const lcs::ContactForce& f : forces) {
@@ -149,19 +151,22 @@ std::string statusCodeName(std::uint8_t status_code) {
   if (status_code == lcs::SolverStats::NO_COMPLIANCE) return "no_compliance";
   if (status_code == lcs::SolverStats::DROPPED) return "dropped";
   if (status_code < lcs::SolverStats::NO_COMPLIANCE)
-    return lcs::core::statusName(static_cast<lcs::core::SolveStatus>(status_code));  // "unknown" past the last
+    return lcs::core::statusName(
+        static_cast<lcs::core::SolveStatus>(status_code));  // "unknown" past the last
   return "unknown";
 }
 
 bool solveGaveForces(const lcs::core::SolveResult& result) {
-  return result.status == lcs::core::SolveStatus::kConverged || result.status == lcs::core::SolveStatus::kMaxIterations ||
+  return result.status == lcs::core::SolveStatus::kConverged ||
+         result.status == lcs::core::SolveStatus::kMaxIterations ||
          result.status == lcs::core::SolveStatus::kTimeBudget;
 }
 
 bool allFinite(const lcs::ConstraintForces& forces) {
   for (const lcs::ContactForce& f : forces.forces) {
-    if (!std::isfinite(f.normal_force) || !std::isfinite(f.tangent1_force) || !std::isfinite(f.tangent2_force) ||
-        !finite(f.force) || !finite(f.position) || !finite(f.normal) || !finite(f.tangent1) || !finite(f.tangent2))
+    if (!std::isfinite(f.normal_force) || !std::isfinite(f.tangent1_force) ||
+        !std::isfinite(f.tangent2_force) || !finite(f.force) || !finite(f.position) || !finite(f.normal) ||
+        !finite(f.tangent1) || !finite(f.tangent2))
       return false;
     for (double v : f.lambda)
       if (!std::isfinite(v)) return false;
@@ -172,7 +177,8 @@ bool allFinite(const lcs::ConstraintForces& forces) {
 }
 
 bool allFinite(const lcs::SolverStats& stats) {
-  return std::isfinite(stats.residual) && std::isfinite(stats.solver_error) && std::isfinite(stats.solve_time);
+  return std::isfinite(stats.residual) && std::isfinite(stats.solver_error) &&
+         std::isfinite(stats.solve_time);
 }
 
 }  // namespace lcp_contact_solver_ros

@@ -32,7 +32,8 @@ lcs::ContactArray toContactArrayMsg(const scene::StepProblem& step, const std_ms
   // The scene's contacts are core ContactFrames: sliced into the shared writer's input.
   const std::vector<ContactFrame> frames(step.frames.begin(), step.frames.end());
   std::vector<ContactBodies> bodies(step.frames.size());
-  for (std::size_t i = 0; i < step.frames.size(); ++i) bodies[i] = {step.frames[i].body_a_name, step.frames[i].body_b_name};
+  for (std::size_t i = 0; i < step.frames.size(); ++i)
+    bodies[i] = {step.frames[i].body_a_name, step.frames[i].body_b_name};
   return toContactArrayMsg(step.problem, frames, bodies, header);
 }
 
@@ -42,7 +43,8 @@ lcs::Compliance toComplianceMsg(const scene::StepProblem& step, const std_msgs::
   return msg;
 }
 
-std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::core::Problem& problem, Eigen::VectorXd* lambda) {
+std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::core::Problem& problem,
+                         Eigen::VectorXd* lambda) {
   const std::vector<int> offsets = problem.rowOffsets();
   *lambda = Eigen::VectorXd::Zero(offsets.back());
   std::unordered_map<std::int64_t, std::size_t> index;
@@ -51,16 +53,18 @@ std::string toStepForces(const lcs::ConstraintForces& forces, const lcs::core::P
   Eigen::VectorXd out = Eigen::VectorXd::Zero(offsets.back());
   for (const lcs::ContactForce& f : forces.forces) {
     const auto it = index.find(f.id);
-    if (it == index.end()) return "the forces name contact id " + std::to_string(f.id) + ", which is not in the step";
+    if (it == index.end())
+      return "the forces name contact id " + std::to_string(f.id) + ", which is not in the step";
     const std::size_t i = it->second;
     if (seen[i]) return "the forces give contact id " + std::to_string(f.id) + " twice";
     seen[i] = true;
     const int rows = offsets[i + 1] - offsets[i];
     if (static_cast<int>(f.lambda.size()) != rows)
-      return "the forces give " + std::to_string(f.lambda.size()) + " rows for contact id " + std::to_string(f.id) +
-             ", which has " + std::to_string(rows);
+      return "the forces give " + std::to_string(f.lambda.size()) + " rows for contact id " +
+             std::to_string(f.id) + ", which has " + std::to_string(rows);
     for (int k = 0; k < rows; ++k) {
-      if (!std::isfinite(f.lambda[k])) return "the force of contact id " + std::to_string(f.id) + " is not finite";
+      if (!std::isfinite(f.lambda[k]))
+        return "the force of contact id " + std::to_string(f.id) + " is not finite";
       out[offsets[i] + k] = f.lambda[k];
     }
   }
@@ -83,8 +87,9 @@ visualization_msgs::MarkerArray bodyMarkers(const scene::Scene& scene, const std
   visualization_msgs::MarkerArray array;
   int dynamic_index = 0;
   for (const scene::RigidBody& body : scene.bodies) {
-    const std_msgs::ColorRGBA color =
-        body.is_static ? rgba(0.6f, 0.6f, 0.62f, body.name == "ground_plane" ? 0.5f : 1.0f) : paletteColor(dynamic_index);
+    const std_msgs::ColorRGBA color = body.is_static
+                                          ? rgba(0.6f, 0.6f, 0.62f, body.name == "ground_plane" ? 0.5f : 1.0f)
+                                          : paletteColor(dynamic_index);
     if (!body.is_static) ++dynamic_index;
     const Eigen::Isometry3d link = body.pose();
     for (std::size_t k = 0; k < body.shapes.size(); ++k) {

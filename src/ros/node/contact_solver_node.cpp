@@ -160,8 +160,8 @@ void ContactSolverNode::onPair(const InputPair& pair) {
     static std::atomic<double> last_warning{0.0};
     if (wallThrottle(&last_warning, 1.0))
       ROS_WARN_STREAM("Contacts at " << stampText(contacts->header.stamp) << " come after "
-                                  << stampText(last_stamp_) << ": time jumped back (simulator restart?); "
-                                  << "the warm start is reset");
+                                     << stampText(last_stamp_) << ": time jumped back (simulator restart?); "
+                                     << "the warm start is reset");
     cycle_.resetWarmStart();
   }
   last_stamp_ = contacts->header.stamp;
@@ -222,7 +222,8 @@ bool ContactSolverNode::onSolveService(lcp_contact_solver::SolveContacts::Reques
     response.stats.forces_published = true;
   }
   response.success = true;
-  response.message = response.stats.status + (cycle.result.message.empty() ? "" : ": " + cycle.result.message);
+  response.message =
+      response.stats.status + (cycle.result.message.empty() ? "" : ": " + cycle.result.message);
   return true;
 }
 
@@ -231,7 +232,8 @@ void ContactSolverNode::onReconfigure(Config& config, std::uint32_t /*level*/) {
   NodeSettings next = accepted_;
   const std::string error = fromConfig(config, &next);
   if (!error.empty()) {
-    ROS_ERROR_STREAM("dynamic_reconfigure change refused: " << error << "; the previous values stay in force");
+    ROS_ERROR_STREAM("dynamic_reconfigure change refused: " << error
+                                                            << "; the previous values stay in force");
     config = toConfig(accepted_);  // the reply shows what is in force
     return;
   }
@@ -253,7 +255,8 @@ void ContactSolverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   const InputCounts inputs = inputs_.counts();
   std::lock_guard<std::mutex> lock(health_mutex_);
   if (health_.problems_since_report > 0 || !health_.last_converged) {
-    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "last solve: %s; %lu rejected/unpaired/failed inputs since the last report",
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "last solve: %s; %lu rejected/unpaired/failed inputs since the last report",
                     health_.last_status.c_str(), static_cast<unsigned long>(health_.problems_since_report));
   } else {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "last solve: %s", health_.last_status.c_str());
@@ -269,8 +272,8 @@ void ContactSolverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("outcome: rejected", health_.rejected);
   status.add("outcome: unpaired (no compliance)", inputs.unpaired);
   status.add("outcome: dropped (node behind)", inputs.dropped);
-  status.add("outcome: waiting or being solved", inputs.arrays_received - health_.solves - health_.rejected -
-                                                      inputs.unpaired - inputs.dropped);
+  status.add("outcome: waiting or being solved",
+             inputs.arrays_received - health_.solves - health_.rejected - inputs.unpaired - inputs.dropped);
   status.add("compliances without contact array", inputs.compliances_unpaired);
   status.add("overload policy", std::string(overloadPolicyName(inputs_.policy())));
   status.add("max queue time since last report (s)", health_.max_queue_time);
@@ -311,7 +314,8 @@ void ContactSolverNode::recordSolve(const lcs::core::SolveResult& result) {
   }
 }
 
-void ContactSolverNode::reject(const std_msgs::Header& header, std::uint8_t status_code, const std::string& message) {
+void ContactSolverNode::reject(const std_msgs::Header& header, std::uint8_t status_code,
+                               const std::string& message) {
   {
     std::lock_guard<std::mutex> lock(health_mutex_);
     ++health_.rejected;
@@ -323,16 +327,18 @@ void ContactSolverNode::reject(const std_msgs::Header& header, std::uint8_t stat
 
 bool ContactSolverNode::publishForces(const std_msgs::Header& header, CycleOutput* cycle) {
   if (!cycle->has_forces) {
-    ROS_ERROR_STREAM_THROTTLE(1.0, "Contacts at " << stampText(header.stamp)
-                                                  << ": a force is not finite; nothing published");
+    ROS_ERROR_STREAM_THROTTLE(
+        1.0, "Contacts at " << stampText(header.stamp) << ": a force is not finite; nothing published");
     return false;
   }
   forces_pub_.publish(boost::make_shared<lcp_contact_solver::ConstraintForces>(std::move(cycle->forces)));
   return true;
 }
 
-bool ContactSolverNode::publishMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                       const lcs::core::Problem& problem, const lcs::core::SolveResult& result) {
+bool ContactSolverNode::publishMarkers(const std_msgs::Header& header,
+                                       const std::vector<ContactFrame>& frames,
+                                       const lcs::core::Problem& problem,
+                                       const lcs::core::SolveResult& result) {
   if (!shouldBuildMarkers(markers_pub_.getNumSubscribers())) return false;
   const std::vector<double> mu = lcs::core::effectiveMu(problem, active_.solver.mu);
   markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(

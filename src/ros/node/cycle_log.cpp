@@ -7,8 +7,8 @@
 
 namespace lcp_contact_solver_ros {
 
-int worstContact(const lcs::core::Problem& problem, const lcs::core::SolveResult& result, const std::vector<double>& mu,
-                 double* error) {
+int worstContact(const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
+                 const std::vector<double>& mu, double* error) {
   const std::vector<int> offsets = problem.rowOffsets();
   int worst = -1;
   *error = 0.0;
@@ -19,7 +19,7 @@ int worstContact(const lcs::core::Problem& problem, const lcs::core::SolveResult
     single.contacts = {problem.contacts[i]};
     const int rows = problem.contacts[i].rows;
     const double e = lcs::core::naturalMapResidual(single, {mu[i]}, result.forces.segment(offsets[i], rows),
-                                             result.d.segment(offsets[i], rows));
+                                                   result.d.segment(offsets[i], rows));
     if (worst < 0 || e > *error) {
       worst = static_cast<int>(i);
       *error = e;
@@ -32,10 +32,12 @@ std::string cycleSummary(const lcs::core::Problem& problem, const lcs::core::Sol
                          const std::vector<double>& mu) {
   std::ostringstream out;
   out << problem.contacts.size() << " contacts, " << problem.rowCount() << " rows ("
-      << (problem.bodies ? "bodies, no" : std::holds_alternative<Eigen::MatrixXd>(problem.W) ? "dense" : "block-sparse")
-      << " W); " << result.solver
-      << ": " << lcs::core::statusName(result.status) << " after " << result.iterations << " iterations, residual "
-      << result.residual << ", " << result.solve_time * 1e3 << " ms";
+      << (problem.bodies                                       ? "bodies, no"
+          : std::holds_alternative<Eigen::MatrixXd>(problem.W) ? "dense"
+                                                               : "block-sparse")
+      << " W); " << result.solver << ": " << lcs::core::statusName(result.status) << " after "
+      << result.iterations << " iterations, residual " << result.residual << ", " << result.solve_time * 1e3
+      << " ms";
   double error = 0.0;
   const int worst = worstContact(problem, result, mu, &error);
   if (worst >= 0)

@@ -6,7 +6,9 @@ using lcp_contact_solver::SolverStats;
 
 CycleSolver::CycleSolver(const lcs::core::SolverParams& params) : solver_(params) {}
 
-std::string CycleSolver::setParams(const lcs::core::SolverParams& params) { return solver_.setParams(params); }
+std::string CycleSolver::setParams(const lcs::core::SolverParams& params) {
+  return solver_.setParams(params);
+}
 
 CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
                                const lcp_contact_solver::Compliance& compliance, bool build_forces) {
@@ -15,7 +17,7 @@ CycleOutput CycleSolver::solve(const lcp_contact_solver::ContactArray& contacts,
   out.error = toProblem(contacts, compliance, solver_.params().max_rows, &out.problem, &out.frames,
                         /*validate=*/false);
   if (out.error.empty()) {
-    out.result = solver_.solveInPlace(out.problem);  // erp/softness without a copy of W
+    out.result = solver_.solveInPlace(out.problem);                  // erp/softness without a copy of W
     if (out.result.status == lcs::core::SolveStatus::kInvalidInput)  // refused by the core's own checks
       out.error = out.result.message.empty() ? "invalid input" : out.result.message;
   }

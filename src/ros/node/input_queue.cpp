@@ -22,7 +22,8 @@ const char* overloadPolicyName(OverloadPolicy policy) {
 InputQueue::InputQueue(OverloadPolicy policy, std::size_t capacity)
     : policy_(policy), capacity_(capacity < 1 ? 1 : capacity) {}
 
-void InputQueue::addContacts(const lcp_contact_solver::ContactArray::ConstPtr& contacts, const ros::Time& now) {
+void InputQueue::addContacts(const lcp_contact_solver::ContactArray::ConstPtr& contacts,
+                             const ros::Time& now) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.arrays_received;
   if (contacts->header.stamp < last_contacts_stamp_) forgetOldRunLocked(contacts->header.stamp, true);
@@ -32,24 +33,29 @@ void InputQueue::addContacts(const lcp_contact_solver::ContactArray::ConstPtr& c
     // The same stamp again before its compliance (a simulator that restarted): the first
     // array can no longer be told apart from the second, so it is given up.
     ++counts_.unpaired;
-    dropped_.push_back({it->second.contacts->header, "superseded by a later ContactArray with the same stamp "
-                                                     "before its Compliance came", false});
+    dropped_.push_back({it->second.contacts->header,
+                        "superseded by a later ContactArray with the same stamp "
+                        "before its Compliance came",
+                        false});
     it->second.contacts = contacts;
     it->second.first_arrival = now;
     return;
   }
-  if (it == pending_.end()) it = pending_.emplace(contacts->header.stamp, Pending{nullptr, nullptr, now}).first;
+  if (it == pending_.end())
+    it = pending_.emplace(contacts->header.stamp, Pending{nullptr, nullptr, now}).first;
   it->second.contacts = contacts;
   if (it->second.compliance) completeLocked(it);
 }
 
-void InputQueue::addCompliance(const lcp_contact_solver::Compliance::ConstPtr& compliance, const ros::Time& now) {
+void InputQueue::addCompliance(const lcp_contact_solver::Compliance::ConstPtr& compliance,
+                               const ros::Time& now) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.compliances_received;
   if (compliance->header.stamp < last_compliance_stamp_) forgetOldRunLocked(compliance->header.stamp, false);
   last_compliance_stamp_ = compliance->header.stamp;
   auto it = pending_.find(compliance->header.stamp);
-  if (it == pending_.end()) it = pending_.emplace(compliance->header.stamp, Pending{nullptr, nullptr, now}).first;
+  if (it == pending_.end())
+    it = pending_.emplace(compliance->header.stamp, Pending{nullptr, nullptr, now}).first;
   if (it->second.compliance) ++counts_.compliances_unpaired;  // a duplicate: the newer one counts
   it->second.compliance = compliance;
   if (it->second.contacts) completeLocked(it);
@@ -60,7 +66,8 @@ void InputQueue::completeLocked(std::map<ros::Time, Pending>::iterator it) {
   pending_.erase(it);
   if (policy_ == OverloadPolicy::kQueue && ready_.size() > capacity_) {
     std::ostringstream reason;
-    reason << "dropped: the node was behind and its queue (overload queue, queue_size " << capacity_ << ") was full";
+    reason << "dropped: the node was behind and its queue (overload queue, queue_size " << capacity_
+           << ") was full";
     dropLocked(ready_.front(), reason.str());
     ready_.pop_front();
   }
@@ -71,7 +78,8 @@ void InputQueue::forgetOldRunLocked(const ros::Time& stamp, bool contacts_topic)
   const ros::Time& last = contacts_topic ? last_contacts_stamp_ : last_compliance_stamp_;
   for (auto it = pending_.begin(); it != pending_.end();) {
     const Pending& p = it->second;
-    const bool has_this_half = contacts_topic ? static_cast<bool>(p.contacts) : static_cast<bool>(p.compliance);
+    const bool has_this_half =
+        contacts_topic ? static_cast<bool>(p.contacts) : static_cast<bool>(p.compliance);
     // A half of this topic came before the jump: old. A half of the other topic at a later
     // stamp than the new run's first: old too (the new run has not got that far).
     if (!has_this_half && it->first <= stamp) {
@@ -97,7 +105,8 @@ void InputQueue::dropLocked(const InputPair& pair, const std::string& reason) {
   dropped_.push_back({pair.contacts->header, reason, true});
 }
 
-bool InputQueue::take(std::chrono::milliseconds timeout, InputPair* pair, std::vector<UnsolvedInput>* dropped) {
+bool InputQueue::take(std::chrono::milliseconds timeout, InputPair* pair,
+                      std::vector<UnsolvedInput>* dropped) {
   std::unique_lock<std::mutex> lock(mutex_);
   ready_cv_.wait_for(lock, timeout, [this] { return stopped_ || !ready_.empty() || !dropped_.empty(); });
   if (policy_ == OverloadPolicy::kDropOldest && ready_.size() > 1) {

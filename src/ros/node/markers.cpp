@@ -12,7 +12,9 @@ namespace {
 
 constexpr int kConeSegments = 12;
 
-bool finitePoint(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool finitePoint(const geometry_msgs::Point& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 
 bool finiteMarker(const visualization_msgs::Marker& m) {
   if (!finitePoint(m.pose.position) || !std::isfinite(m.scale.x) || !std::isfinite(m.scale.y) ||
@@ -38,8 +40,10 @@ visualization_msgs::Marker baseMarker(const std_msgs::Header& header, const char
   return m;
 }
 
-visualization_msgs::Marker contactPoints(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                         const lcs::core::SolveResult& result, const DisplayOptions& options) {
+visualization_msgs::Marker contactPoints(const std_msgs::Header& header,
+                                         const std::vector<ContactFrame>& frames,
+                                         const lcs::core::SolveResult& result,
+                                         const DisplayOptions& options) {
   auto m = baseMarker(header, kNsContactPoints, 0, visualization_msgs::Marker::SPHERE_LIST, options);
   const double size = 0.2 * options.cone_height;
   m.scale.x = m.scale.y = m.scale.z = size;
@@ -63,8 +67,8 @@ visualization_msgs::Marker normals(const std_msgs::Header& header, const std::ve
 }
 
 void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                    const lcs::core::Problem& problem, const lcs::core::SolveResult& result, const DisplayOptions& options,
-                    visualization_msgs::MarkerArray* markers) {
+                    const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
+                    const DisplayOptions& options, visualization_msgs::MarkerArray* markers) {
   const std::vector<int> offsets = problem.rowOffsets();
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const ContactFrame& f = frames[i];
@@ -92,9 +96,11 @@ void addForceArrows(const std_msgs::Header& header, const std::vector<ContactFra
 }
 
 // Cones of admissible forces: apex at the contact, opening along the normal, radius μ h.
-visualization_msgs::Marker frictionCones(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                         const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
-                                         const std::vector<double>& mu, const DisplayOptions& options) {
+visualization_msgs::Marker frictionCones(const std_msgs::Header& header,
+                                         const std::vector<ContactFrame>& frames,
+                                         const lcs::core::Problem& problem,
+                                         const lcs::core::SolveResult& result, const std::vector<double>& mu,
+                                         const DisplayOptions& options) {
   auto m = baseMarker(header, kNsFrictionCones, 0, visualization_msgs::Marker::TRIANGLE_LIST, options);
   m.scale.x = m.scale.y = m.scale.z = 1.0;
   const double h = options.cone_height;
@@ -119,13 +125,15 @@ visualization_msgs::Marker frictionCones(const std_msgs::Header& header, const s
 }
 
 // One cell per value at showTranslation + (column, -row) * showCellWidth, in the xy plane.
-visualization_msgs::Marker heatmap(const std_msgs::Header& header, const char* ns, const Eigen::MatrixXd& values,
-                                   int first_column, const DisplayOptions& options) {
+visualization_msgs::Marker heatmap(const std_msgs::Header& header, const char* ns,
+                                   const Eigen::MatrixXd& values, int first_column,
+                                   const DisplayOptions& options) {
   auto m = baseMarker(header, ns, 0, visualization_msgs::Marker::CUBE_LIST, options);
   const double w = options.showCellWidth;
   m.scale.x = m.scale.y = 0.95 * w;
   m.scale.z = 0.1 * w;
-  const Eigen::Vector3d origin(options.showTranslation[0], options.showTranslation[1], options.showTranslation[2]);
+  const Eigen::Vector3d origin(options.showTranslation[0], options.showTranslation[1],
+                               options.showTranslation[2]);
   const double scale = values.size() > 0 ? values.cwiseAbs().maxCoeff() : 0.0;
   for (Eigen::Index r = 0; r < values.rows(); ++r) {
     for (Eigen::Index c = 0; c < values.cols(); ++c) {
@@ -136,11 +144,13 @@ visualization_msgs::Marker heatmap(const std_msgs::Header& header, const char* n
   return m;
 }
 
-void addHeatmaps(const std_msgs::Header& header, const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
-                 const DisplayOptions& options, visualization_msgs::MarkerArray* markers) {
+void addHeatmaps(const std_msgs::Header& header, const lcs::core::Problem& problem,
+                 const lcs::core::SolveResult& result, const DisplayOptions& options,
+                 visualization_msgs::MarkerArray* markers) {
   if (!options.show_w_heatmap || options.showCellWidth <= 0.0) return;
   const int n = std::min(problem.rowCount(), options.heatmap_max_rows);
-  const Eigen::MatrixXd w = lcs::core::leadingComplianceWindow(problem, n);  // the leading n x n window (W or bodies)
+  const Eigen::MatrixXd w =
+      lcs::core::leadingComplianceWindow(problem, n);  // the leading n x n window (W or bodies)
   markers->markers.push_back(heatmap(header, kNsComplianceHeatmap, w, 0, options));
   // λ as one column right of W, one empty column between.
   markers->markers.push_back(heatmap(header, kNsLambdaHeatmap, result.forces.head(n), n + 1, options));
@@ -166,8 +176,10 @@ std_msgs::ColorRGBA heatColor(double value, double scale) {
   return t >= 0.0 ? rgba(1.0f, fade, fade) : rgba(fade, fade, 1.0f);
 }
 
-visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header, const std::vector<ContactFrame>& frames,
-                                             const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
+visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header,
+                                             const std::vector<ContactFrame>& frames,
+                                             const lcs::core::Problem& problem,
+                                             const lcs::core::SolveResult& result,
                                              const std::vector<double>& mu, const DisplayOptions& options) {
   visualization_msgs::MarkerArray markers;
   markers.markers.push_back(contactPoints(header, frames, result, options));
@@ -178,7 +190,8 @@ visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header, con
   // The last guard: a marker with a non-finite number (finite inputs whose products
   // overflow, e.g. a huge μ times the cone height) is left out, never published.
   auto& list = markers.markers;
-  list.erase(std::remove_if(list.begin(), list.end(), [](const visualization_msgs::Marker& m) { return !finiteMarker(m); }),
+  list.erase(std::remove_if(list.begin(), list.end(),
+                            [](const visualization_msgs::Marker& m) { return !finiteMarker(m); }),
              list.end());
   return markers;
 }

@@ -7,7 +7,10 @@ namespace lcp_contact_solver_ros {
 using diagnostic_msgs::DiagnosticStatus;
 
 SolveRateStatus::SolveRateStatus(double min_rate, double max_rate)
-    : DiagnosticTask("solve rate"), min_rate_(min_rate), max_rate_(max_rate), window_start_(ros::WallTime::now()) {}
+    : DiagnosticTask("solve rate"),
+      min_rate_(min_rate),
+      max_rate_(max_rate),
+      window_start_(ros::WallTime::now()) {}
 
 void SolveRateStatus::contactsReceived() {
   std::lock_guard<std::mutex> lock(mutex_);

@@ -14,22 +14,31 @@ namespace {
 template <typename T>
 const char* typeName();
 template <>
-const char* typeName<double>() { return "a number"; }
+const char* typeName<double>() {
+  return "a number";
+}
 template <>
-const char* typeName<int>() { return "an integer"; }
+const char* typeName<int>() {
+  return "an integer";
+}
 template <>
-const char* typeName<bool>() { return "true or false"; }
+const char* typeName<bool>() {
+  return "true or false";
+}
 template <>
-const char* typeName<std::string>() { return "a string"; }
+const char* typeName<std::string>() {
+  return "a string";
+}
 template <>
-const char* typeName<std::vector<double>>() { return "a list of numbers"; }
+const char* typeName<std::vector<double>>() {
+  return "a list of numbers";
+}
 
 // Reads `name` if present; a present value of the wrong type is an error, not a default.
 template <typename T>
 std::string readParam(const ros::NodeHandle& pnh, const std::string& name, T* value) {
   if (!pnh.hasParam(name)) return "";
-  if (!pnh.getParam(name, *value))
-    return "parameter " + pnh.resolveName(name) + " must be " + typeName<T>();
+  if (!pnh.getParam(name, *value)) return "parameter " + pnh.resolveName(name) + " must be " + typeName<T>();
   return "";
 }
 
@@ -75,11 +84,10 @@ std::string readSolverParams(const ros::NodeHandle& pnh, lcs::core::SolverParams
         text = v ? "true" : "false";
         break;
       }
-      case lcs::core::ParamType::kEnum:
-        read = pnh.getParam(spec.name, text);
-        break;
+      case lcs::core::ParamType::kEnum: read = pnh.getParam(spec.name, text); break;
     }
-    if (!read) return "parameter " + pnh.resolveName(spec.name) + " must be " + lcs::core::expectedValue(spec);
+    if (!read)
+      return "parameter " + pnh.resolveName(spec.name) + " must be " + lcs::core::expectedValue(spec);
     if (const std::string why = lcs::core::setParam(p, spec.name, text); !why.empty())
       return "parameter " + pnh.resolveName(spec.name) + ": " + why;
   }
@@ -108,7 +116,6 @@ lcs::core::SolverParams defaultSolverParams() {
 #undef LCS_NODE_DEFAULT
   return params;
 }
-
 
 // The node's own parameters (node_param_table.def), each with its type.
 std::string readNodeParams(const ros::NodeHandle& pnh, NodeSettings* s) {
@@ -198,19 +205,18 @@ lcp_contact_solver::ContactSolverConfig toConfig(const NodeSettings& s) {
     if (spec == nullptr) continue;
     const std::string text = lcs::core::paramText(s.solver, spec->name);
     switch (spec->type) {
-      case lcs::core::ParamType::kDouble: setField(&c, *description, std::strtod(text.c_str(), nullptr)); break;
+      case lcs::core::ParamType::kDouble:
+        setField(&c, *description, std::strtod(text.c_str(), nullptr));
+        break;
       case lcs::core::ParamType::kInt: setField(&c, *description, std::stoi(text)); break;
       case lcs::core::ParamType::kBool: setField(&c, *description, text == "true"); break;
       case lcs::core::ParamType::kEnum: setField(&c, *description, text); break;
     }
   }
   // The node's reconfigurable ones (node_param_table.def).
-#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) \
-  LCS_IN_CONFIG_##group(c.name = s.member;)
-#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) \
-  LCS_IN_CONFIG_##group(c.name = s.member;)
-#define LCS_NODE_BOOL(name, member, def, group, doc) \
-  LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) LCS_IN_CONFIG_##group(c.name = s.member;)
+#define LCS_NODE_BOOL(name, member, def, group, doc) LCS_IN_CONFIG_##group(c.name = s.member;)
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
   LCS_IN_CONFIG_##group(c.name##_x = s.member[0], c.name##_y = s.member[1], c.name##_z = s.member[2];)
 #define LCS_NODE_ENUM(name, member, def, group, doc)
@@ -227,16 +233,14 @@ std::string fromConfig(const lcp_contact_solver::ContactSolverConfig& c, NodeSet
   NodeSettings next = *s;
   for (const auto& description : Config::__getParamDescriptions__()) {
     if (lcs::core::findSolverParam(description->name) == nullptr) continue;
-    if (const std::string error = lcs::core::setParam(&next.solver, description->name, fieldText(c, *description));
+    if (const std::string error =
+            lcs::core::setParam(&next.solver, description->name, fieldText(c, *description));
         !error.empty())
       return error;
   }
-#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) \
-  LCS_IN_CONFIG_##group(next.member = c.name;)
-#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) \
-  LCS_IN_CONFIG_##group(next.member = c.name;)
-#define LCS_NODE_BOOL(name, member, def, group, doc) \
-  LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_DOUBLE(name, member, def, lo, hi, group, doc) LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_INT(name, member, def, lo, hi, group, doc) LCS_IN_CONFIG_##group(next.member = c.name;)
+#define LCS_NODE_BOOL(name, member, def, group, doc) LCS_IN_CONFIG_##group(next.member = c.name;)
 #define LCS_NODE_VEC3(name, member, def, lo, hi, group, doc) \
   LCS_IN_CONFIG_##group(next.member = {{c.name##_x, c.name##_y, c.name##_z}};)
 #define LCS_NODE_ENUM(name, member, def, group, doc)

@@ -46,11 +46,12 @@ AnswerCheck checkAnswer(const lcs::core::Problem& input, const lcs::core::Solver
   std::vector<bool> ignored(n, false);
   for (std::size_t i = 0; i < n; ++i) {
     const auto& f = forces.forces[i];
-    const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(problem.contacts[i].id) + ")";
+    const std::string name =
+        "contact " + std::to_string(i) + " (id " + std::to_string(problem.contacts[i].id) + ")";
     const int rows = offsets[i + 1] - offsets[i];
     if (f.id != problem.contacts[i].id || static_cast<int>(f.lambda.size()) != rows) {
-      check.unfit = name + ": the forces have id " + std::to_string(f.id) + " and " + std::to_string(f.lambda.size()) +
-                    " rows";
+      check.unfit = name + ": the forces have id " + std::to_string(f.id) + " and " +
+                    std::to_string(f.lambda.size()) + " rows";
       return check;
     }
     for (int r = 0; r < rows; ++r) {
@@ -69,7 +70,8 @@ AnswerCheck checkAnswer(const lcs::core::Problem& input, const lcs::core::Solver
   const std::vector<double> mu = lcs::core::effectiveMu(problem, params.mu);
   check.residual = lcs::core::naturalMapResidual(problem, mu, lambda, d, ignored);
 
-  const std::vector<lcs::core::ContactState> states = lcs::core::classifyContacts(problem, mu, lambda, ignored);
+  const std::vector<lcs::core::ContactState> states =
+      lcs::core::classifyContacts(problem, mu, lambda, ignored);
   const bool disc = params.friction_model == lcs::core::FrictionModel::kCoulombDisc;
   for (std::size_t i = 0; i < n; ++i) {
     const lcs::core::Contact& c = problem.contacts[i];
@@ -77,8 +79,9 @@ AnswerCheck checkAnswer(const lcs::core::Problem& input, const lcs::core::Solver
     const int rows = offsets[i + 1] - offsets[i];
     const std::string name = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")";
     if (static_cast<std::uint8_t>(states[i]) != forces.forces[i].state)
-      violation(&check.state_differences, name + ": recorded state " + std::to_string(forces.forces[i].state) +
-                                              ", its force gives " + std::to_string(static_cast<int>(states[i])));
+      violation(&check.state_differences, name + ": recorded state " +
+                                              std::to_string(forces.forces[i].state) + ", its force gives " +
+                                              std::to_string(static_cast<int>(states[i])));
     if (ignored[i]) {
       for (int r = 0; r < rows; ++r)
         if (l[r] != 0.0) {
@@ -123,12 +126,13 @@ bool AnswerChecks::add(const AnswerCheck& check, const lcp_contact_solver::Solve
       if (!residualsAgree(check.residual, stats->residual)) {
         ++residual_differs;
         if (failure.empty())
-          failure = "residual " + exactNumber(check.residual) + " recomputed, " + exactNumber(stats->residual) +
-                    " recorded";
+          failure = "residual " + exactNumber(check.residual) + " recomputed, " +
+                    exactNumber(stats->residual) + " recorded";
       }
       // The pyramid models converge on their own law; their disc residual is not bounded.
       if (stats->converged && params.stopping_rule == lcs::core::StoppingRule::kResidual &&
-          params.friction_model == lcs::core::FrictionModel::kCoulombDisc && !(check.residual <= params.tolerance)) {
+          params.friction_model == lcs::core::FrictionModel::kCoulombDisc &&
+          !(check.residual <= params.tolerance)) {
         ++above_tolerance;
         if (failure.empty())
           failure = "recorded as converged, residual " + exactNumber(check.residual) + " > tolerance " +

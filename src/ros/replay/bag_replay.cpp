@@ -62,7 +62,8 @@ class Replayer {
     countUnusedReference();
     if (out_ && options_.copy_inputs && !r_.reference_topic.empty()) {  // the output stays a reference bag
       rosbag::View view(bag, rosbag::TopicQuery(r_.reference_topic));
-      for (const rosbag::MessageInstance& m : view) out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+      for (const rosbag::MessageInstance& m : view)
+        out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
     }
     if (out_) {
       out_->close();
@@ -79,24 +80,27 @@ class Replayer {
     r_.contacts_topic = chooseTopic<ContactArray>(connections, options_.contacts_topic, kDefaultContacts,
                                                   "--contacts-topic", true, &r_.notes, &error);
     if (error.empty())
-      r_.compliance_topic = chooseTopic<Compliance>(connections, options_.compliance_topic, kDefaultCompliance,
-                                                    "--compliance-topic", true, &r_.notes, &error);
+      r_.compliance_topic =
+          chooseTopic<Compliance>(connections, options_.compliance_topic, kDefaultCompliance,
+                                  "--compliance-topic", true, &r_.notes, &error);
     if (error.empty() && !options_.reference_topic.empty())
       r_.reference_topic = chooseTopic<ConstraintForces>(connections, options_.reference_topic, "",
                                                          "--reference-topic", true, &r_.notes, &error);
     if (error.empty())
-      r_.forces_topic = chooseTopic<ConstraintForces>(connections, options_.forces_topic, kDefaultForces,
-                                                      "--forces-topic", false, &r_.notes, &error, r_.reference_topic);
+      r_.forces_topic =
+          chooseTopic<ConstraintForces>(connections, options_.forces_topic, kDefaultForces, "--forces-topic",
+                                        false, &r_.notes, &error, r_.reference_topic);
     if (error.empty() && !r_.reference_topic.empty() && r_.reference_topic == r_.forces_topic)
       error = r_.reference_topic + " cannot be both the recorded output and the reference";
     if (error.empty())
-      r_.stats_topic = chooseTopic<SolverStats>(connections, options_.stats_topic, kDefaultStats, "--stats-topic",
-                                                false, &r_.notes, &error);
+      r_.stats_topic = chooseTopic<SolverStats>(connections, options_.stats_topic, kDefaultStats,
+                                                "--stats-topic", false, &r_.notes, &error);
     if (!error.empty()) return false;
     if (r_.forces_topic.empty())
-      r_.notes.push_back(r_.reference_topic.empty() ? "no recorded ConstraintForces in the bag: nothing to compare with"
-                                                    : "no recorded output of the node in the bag: only the reference "
-                                                      "is compared with");
+      r_.notes.push_back(r_.reference_topic.empty()
+                             ? "no recorded ConstraintForces in the bag: nothing to compare with"
+                             : "no recorded output of the node in the bag: only the reference "
+                               "is compared with");
     r_.out_forces_topic = r_.forces_topic.empty() ? normalizeTopic(kDefaultForces) : r_.forces_topic;
     r_.out_stats_topic = r_.stats_topic.empty() ? normalizeTopic(kDefaultStats) : r_.stats_topic;
     rosbag::View contacts(bag, rosbag::TopicQuery(r_.contacts_topic));
@@ -149,7 +153,8 @@ class Replayer {
   }
 
   void replay(rosbag::Bag& bag) {
-    rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{r_.contacts_topic, r_.compliance_topic}));
+    rosbag::View view(bag,
+                      rosbag::TopicQuery(std::vector<std::string>{r_.contacts_topic, r_.compliance_topic}));
     StampPairer::Pair pair;
     for (const rosbag::MessageInstance& m : view) {
       last_time_ = m.getTime();
@@ -229,7 +234,8 @@ class Replayer {
     if (recorded != nullptr && options_.recorded_params) {
       const auto stats = ref_.stats.find(stamp);
       r_.answers.add(checkAnswer(cycle.problem, *options_.recorded_params, *recorded),
-                     stats == ref_.stats.end() ? nullptr : stats->second.get(), *options_.recorded_params, stamp);
+                     stats == ref_.stats.end() ? nullptr : stats->second.get(), *options_.recorded_params,
+                     stamp);
     }
     if (!r_.reference_topic.empty()) {
       const ConstraintForces* outside = take(ref_.outside, &ref_.used_outside, stamp);
@@ -245,7 +251,8 @@ class Replayer {
         ++c.iteration_differences;
       }
       if (s.status_code != cycle.stats.status_code) ++c.status_differences;
-      c.max_residual_relative = std::max(c.max_residual_relative, relativeDifference(s.residual, cycle.stats.residual));
+      c.max_residual_relative =
+          std::max(c.max_residual_relative, relativeDifference(s.residual, cycle.stats.residual));
     }
   }
 
@@ -256,9 +263,9 @@ class Replayer {
       ++r_.unpaired;
       const auto it = contacts_time_.find(contacts->header.stamp);
       const ros::Time when = it == contacts_time_.end() ? last_time_ : it->second;
-      const SolverStats stats = rejectedStatsMsg(contacts->header, SolverStats::NO_COMPLIANCE,
-                                                 "no compliance with stamp " + stampDigits(contacts->header.stamp) +
-                                                     " in the bag");
+      const SolverStats stats =
+          rejectedStatsMsg(contacts->header, SolverStats::NO_COMPLIANCE,
+                           "no compliance with stamp " + stampDigits(contacts->header.stamp) + " in the bag");
       emit(stats, nullptr, when);
     }
   }

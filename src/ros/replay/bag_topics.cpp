@@ -20,10 +20,10 @@ std::string normalizeTopic(const std::string& name) {
   return start == std::string::npos ? "/" : "/" + name.substr(start);
 }
 
-std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& type,
-                        const std::string& md5, const std::string& requested, const std::string& default_name,
-                        const std::string& option, bool required, std::vector<std::string>* notes,
-                        std::string* error, const std::string& exclude) {
+std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections,
+                        const std::string& type, const std::string& md5, const std::string& requested,
+                        const std::string& default_name, const std::string& option, bool required,
+                        std::vector<std::string>* notes, std::string* error, const std::string& exclude) {
   std::set<std::string> all_topics, typed_topics;
   for (const rosbag::ConnectionInfo* c : connections) {
     all_topics.insert(c->topic);
@@ -37,8 +37,8 @@ std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connec
         return "";
       }
       if (c->md5sum != md5) {
-        *error = "topic " + topic + " was recorded with another definition of " + type + " (md5 " + c->md5sum +
-                 ", this build has " + md5 + ")";
+        *error = "topic " + topic + " was recorded with another definition of " + type + " (md5 " +
+                 c->md5sum + ", this build has " + md5 + ")";
         return "";
       }
     }
@@ -59,8 +59,8 @@ std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connec
   }
   if (typed_topics.size() > 1) {
     *error = "several " + type + " topics (" +
-             joined(std::vector<std::string>(typed_topics.begin(), typed_topics.end())) + "): choose one with " +
-             option;
+             joined(std::vector<std::string>(typed_topics.begin(), typed_topics.end())) +
+             "): choose one with " + option;
     return "";
   }
   if (required) *error = "no " + type + " topic in the bag (expected " + wanted + ")";

@@ -33,8 +33,8 @@ ForceDifference compareForces(const ConstraintForces& forces, const ConstraintFo
       return mismatch("contact " + std::to_string(i) + " has id " + std::to_string(f.id) + ", recorded " +
                       std::to_string(r.id));
     if (f.lambda.size() != r.lambda.size())
-      return mismatch("contact " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) + " rows, recorded " +
-                      std::to_string(r.lambda.size()));
+      return mismatch("contact " + std::to_string(i) + " has " + std::to_string(f.lambda.size()) +
+                      " rows, recorded " + std::to_string(r.lambda.size()));
     for (std::size_t k = 0; k < f.lambda.size(); ++k) {
       const double d = std::abs(f.lambda[k] - r.lambda[k]);
       diff.max_abs = std::max(diff.max_abs, d);
@@ -63,9 +63,10 @@ CycleDifference Comparison::add(const ConstraintForces* replayed, const Constrai
   if (replayed == nullptr && reference == nullptr) return out;
   if (reference == nullptr) return not_comparable(&missing_reference, "no recorded forces");
   if (replayed == nullptr)
-    return not_comparable(&missing_replay, cycle < 0 ? "recorded forces, but no such cycle"
-                                                     : "recorded forces, the replay gave none" +
-                                                           (why_no_replay.empty() ? "" : " (" + why_no_replay + ")"));
+    return not_comparable(&missing_replay,
+                          cycle < 0 ? "recorded forces, but no such cycle"
+                                    : "recorded forces, the replay gave none" +
+                                          (why_no_replay.empty() ? "" : " (" + why_no_replay + ")"));
   const ForceDifference d = compareForces(*replayed, *reference);
   if (!d.mismatch.empty()) return not_comparable(&mismatched, d.mismatch);
   ++compared;
@@ -83,7 +84,8 @@ CycleDifference Comparison::add(const ConstraintForces* replayed, const Constrai
 }
 
 bool Comparison::exceeds(double tolerance) const {
-  return compared == 0 || mismatched > 0 || missing_reference > 0 || missing_replay > 0 || !(max_relative <= tolerance);
+  return compared == 0 || mismatched > 0 || missing_reference > 0 || missing_replay > 0 ||
+         !(max_relative <= tolerance);
 }
 
 }  // namespace lcp_contact_solver_ros

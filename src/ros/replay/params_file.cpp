@@ -69,8 +69,10 @@ std::string writeParamsFile(const std::string& path, const lcs::core::SolverPara
   std::ofstream out(path);
   if (!out) return path + ": cannot write (" + std::strerror(errno) + ")";
   out << "# Solver parameters of contact_solver_node (private ~names), as used for the forces of the\n"
-         "# bag beside this file. `replay BAG` reads them; see docs/TOOLS.md, \"Replaying recorded traffic\".\n";
-  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs()) out << spec.name << ": " << lcs::core::paramText(p, spec.name) << "\n";
+         "# bag beside this file. `replay BAG` reads them; see docs/TOOLS.md, \"Replaying recorded "
+         "traffic\".\n";
+  for (const lcs::core::ParamSpec& spec : lcs::core::solverParamSpecs())
+    out << spec.name << ": " << lcs::core::paramText(p, spec.name) << "\n";
   out.close();
   if (!out) return path + ": write failed";
   return "";

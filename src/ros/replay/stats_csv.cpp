@@ -9,12 +9,14 @@ namespace lcp_contact_solver_ros {
 
 using lcp_contact_solver::SolverStats;
 
-const char* StatsCsvWriter::header() { return "stamp,contacts,rows,iterations,residual,converged,status,solve_time"; }
+const char* StatsCsvWriter::header() {
+  return "stamp,contacts,rows,iterations,residual,converged,status,solve_time";
+}
 
 std::string StatsCsvWriter::row(const SolverStats& s) {
-  return stampDigits(s.header.stamp) + "," + std::to_string(s.num_contacts) + "," + std::to_string(s.num_rows) + "," +
-         std::to_string(s.iterations) + "," + exactNumber(s.residual) + "," + (s.converged ? "true" : "false") + "," +
-         s.status + "," + exactNumber(s.solve_time);
+  return stampDigits(s.header.stamp) + "," + std::to_string(s.num_contacts) + "," +
+         std::to_string(s.num_rows) + "," + std::to_string(s.iterations) + "," + exactNumber(s.residual) +
+         "," + (s.converged ? "true" : "false") + "," + s.status + "," + exactNumber(s.solve_time);
 }
 
 std::string StatsCsvWriter::open(const std::string& path) {

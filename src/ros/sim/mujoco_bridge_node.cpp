@@ -42,7 +42,6 @@ std::unique_ptr<scene::MujocoWorld> loadWorld(const MujocoBridgeSettings& s) {
 
 }  // namespace
 
-
 MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
     : nh_(nh),
       pnh_(pnh),
@@ -55,7 +54,8 @@ MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHan
   extract_.include_equalities = settings_.include_equalities;
   extract_.dense_max_rows = settings_.dense_max_rows;
   if (settings_.storage == "dense") extract_.storage = scene::MujocoExtractOptions::Storage::kDense;
-  if (settings_.storage == "block_sparse") extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;
+  if (settings_.storage == "block_sparse")
+    extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;
 
   report_pub_ = pnh_.advertise<diagnostic_msgs::DiagnosticStatus>("step_report", 100);
   reference_pub_ = pnh_.advertise<lcp_contact_solver::ConstraintForces>("reference_forces", 100);
@@ -82,10 +82,11 @@ SolverLink::Options MujocoBridgeNode::linkOptions(const MujocoBridgeNode* node) 
 
 bool MujocoBridgeNode::run() {
   const mjModel* m = world_->model();
-  ROS_INFO_STREAM("MuJoCo " << mj_versionString() << ": " << settings_.model << " (nq " << m->nq << ", nv " << m->nv
-                            << "), cone " << scene::mujocoConeName(m->opt.cone) << ", dt " << dt_ << " s, mode "
-                            << settings_.mode << ", MuJoCo solver " << scene::mujocoSolverName(m->opt.solver)
-                            << " (" << m->opt.iterations << " iterations, tolerance " << m->opt.tolerance << ")");
+  ROS_INFO_STREAM("MuJoCo " << mj_versionString() << ": " << settings_.model << " (nq " << m->nq << ", nv "
+                            << m->nv << "), cone " << scene::mujocoConeName(m->opt.cone) << ", dt " << dt_
+                            << " s, mode " << settings_.mode << ", MuJoCo solver "
+                            << scene::mujocoSolverName(m->opt.solver) << " (" << m->opt.iterations
+                            << " iterations, tolerance " << m->opt.tolerance << ")");
   link_.publishClock(stepStamp(0, dt_));
   if (!link_.waitForSolver()) return false;
   if (drive_ && settings_.reference) reference_ = world_->clone();
@@ -157,13 +158,16 @@ bool MujocoBridgeNode::exchange(const scene::MujocoProblem& mp, const ros::Time&
   std_msgs::Header header;
   header.stamp = stamp;
   header.frame_id = settings_.frame_id;
-  auto contacts = boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
+  auto contacts =
+      boost::make_shared<lcp_contact_solver::ContactArray>(toContactArrayMsg(mp, *world_, header));
   auto compliance = boost::make_shared<lcp_contact_solver::Compliance>(toComplianceMsg(mp, header));
   if (mujoco_time >= 0.0 && reference_pub_.getNumSubscribers() > 0) {  // MuJoCo's solver ran for this step
     auto reference = boost::make_shared<lcp_contact_solver::ConstraintForces>();
     const std::string error = toReferenceForcesMsg(mp, *contacts, *compliance, reference.get());
-    if (error.empty()) reference_pub_.publish(reference);
-    else ROS_ERROR_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": no reference forces: " << error);
+    if (error.empty())
+      reference_pub_.publish(reference);
+    else
+      ROS_ERROR_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": no reference forces: " << error);
   }
   const SolverLink::Outcome outcome = link_.exchange(stamp, contacts, compliance);
 
@@ -217,19 +221,17 @@ std::string MujocoBridgeNode::receive(SolverLink::Outcome outcome, const scene::
     }
     case SolverLink::Outcome::kTimeout:
       return "no forces within " + std::to_string(settings_.force_timeout) + " s";
-    case SolverLink::Outcome::kNoSolver:
-      return "no solver publishes " + link_.forcesTopic();
-    case SolverLink::Outcome::kSolverFailed:
-      return "the solver gave no forces (" + link_.failure() + ")";
-    case SolverLink::Outcome::kShutdown:
-      break;
+    case SolverLink::Outcome::kNoSolver: return "no solver publishes " + link_.forcesTopic();
+    case SolverLink::Outcome::kSolverFailed: return "the solver gave no forces (" + link_.failure() + ")";
+    case SolverLink::Outcome::kShutdown: break;
   }
   return "shutdown";
 }
 
 // Our forces came: residual, comparison with MuJoCo's, and in drive mode into the step.
-bool MujocoBridgeNode::useForces(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
-                                 bool mujoco_solves, diagnostic_msgs::DiagnosticStatus* report) {
+bool MujocoBridgeNode::useForces(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda,
+                                 const ros::Time& stamp, bool mujoco_solves,
+                                 diagnostic_msgs::DiagnosticStatus* report) {
   ++counters_.forces_applied;
   const double residual = scene::problemResidual(mp, lambda);
   totals_.last_residual = residual;
@@ -252,11 +254,12 @@ bool MujocoBridgeNode::useForces(const scene::MujocoProblem& mp, const Eigen::Ve
   return drive_;
 }
 
-void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
-                               diagnostic_msgs::DiagnosticStatus* report) {
+void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::VectorXd& lambda,
+                               const ros::Time& stamp, diagnostic_msgs::DiagnosticStatus* report) {
   std::vector<lcs::core::ContactState> states;
   for (const auto& f : link_.forces().forces)
-    states.push_back(static_cast<lcs::core::ContactState>(std::min<int>(f.state, lcs::core::kContactStateCount - 1)));
+    states.push_back(
+        static_cast<lcs::core::ContactState>(std::min<int>(f.state, lcs::core::kContactStateCount - 1)));
   const scene::ForceComparison cmp = scene::compareForces(mp, lambda, states);
   ++counters_.compared;
   totals_.max_abs_diff = std::max(totals_.max_abs_diff, cmp.max_abs);
@@ -278,8 +281,9 @@ void MujocoBridgeNode::compare(const scene::MujocoProblem& mp, const Eigen::Vect
       ROS_WARN_STREAM_THROTTLE(1.0, "Step at " << stampText(stamp) << ": our forces differ from MuJoCo's by "
                                                << cmp.max_rel << " (relative) on the pyramidal LCP");
   }
-  report->level = cmp.max_rel > settings_.max_rel_warn && mp.pyramidal ? diagnostic_msgs::DiagnosticStatus::WARN
-                                                                      : diagnostic_msgs::DiagnosticStatus::OK;
+  report->level = cmp.max_rel > settings_.max_rel_warn && mp.pyramidal
+                      ? diagnostic_msgs::DiagnosticStatus::WARN
+                      : diagnostic_msgs::DiagnosticStatus::OK;
 }
 
 namespace {
@@ -315,10 +319,12 @@ void MujocoBridgeNode::forwardReference() {
   ref_contacts_ = rd->ncon;
   const auto ours = contactPairs(d), theirs = contactPairs(rd);
   std::vector<std::pair<int, int>> differ;
-  std::set_symmetric_difference(ours.begin(), ours.end(), theirs.begin(), theirs.end(), std::back_inserter(differ));
+  std::set_symmetric_difference(ours.begin(), ours.end(), theirs.begin(), theirs.end(),
+                                std::back_inserter(differ));
   ref_pairs_differ_ = static_cast<int>(differ.size());
   totals_.max_ref_position_diff = std::max(totals_.max_ref_position_diff, worst);
-  totals_.max_ref_energy_diff = std::max(totals_.max_ref_energy_diff, std::abs(totals_.last_energy - ref_energy_));
+  totals_.max_ref_energy_diff =
+      std::max(totals_.max_ref_energy_diff, std::abs(totals_.last_energy - ref_energy_));
   if (ref_pairs_differ_ > 0) ++totals_.ref_contact_pair_steps_differ;
 }
 

@@ -17,7 +17,8 @@ std::string validate(const MujocoBridgeSettings& s) {
   std::string why;
   if (s.model.empty()) return "parameter model must name an MJCF file";
   if (s.mode != "cross_check" && s.mode != "drive") return "parameter mode must be cross_check or drive";
-  if (s.cone != "model" && !scene::parseMujocoCone(s.cone, &dummy, &why)) return "parameter cone: " + why + " or model";
+  if (s.cone != "model" && !scene::parseMujocoCone(s.cone, &dummy, &why))
+    return "parameter cone: " + why + " or model";
   if (s.mujoco_solver != "model" && !scene::parseMujocoSolver(s.mujoco_solver, &dummy, &why))
     return "parameter mujoco_solver: " + why + " or model";
   if (!finite(s.mujoco_tolerance)) return "parameter mujoco_tolerance must be finite (< 0 keeps the model's)";
@@ -35,14 +36,23 @@ std::string validate(const MujocoBridgeSettings& s) {
 
 std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
   return loadSettings(pnh, s,
-                      {{"model", &s->model}, {"mode", &s->mode}, {"cone", &s->cone},
-                       {"mujoco_solver", &s->mujoco_solver}, {"mujoco_iterations", &s->mujoco_iterations},
-                       {"mujoco_tolerance", &s->mujoco_tolerance}, {"compare", &s->compare},
-                       {"reference", &s->reference}, {"steps", &s->steps}, {"dt", &s->dt},
+                      {{"model", &s->model},
+                       {"mode", &s->mode},
+                       {"cone", &s->cone},
+                       {"mujoco_solver", &s->mujoco_solver},
+                       {"mujoco_iterations", &s->mujoco_iterations},
+                       {"mujoco_tolerance", &s->mujoco_tolerance},
+                       {"compare", &s->compare},
+                       {"reference", &s->reference},
+                       {"steps", &s->steps},
+                       {"dt", &s->dt},
                        {"min_report_subscribers", &s->min_report_subscribers},
-                       {"include_limits", &s->include_limits}, {"include_equalities", &s->include_equalities},
-                       {"storage", &s->storage}, {"dense_max_rows", &s->dense_max_rows},
-                       {"max_rel_warn", &s->max_rel_warn}, {"print_summary", &s->print_summary}},
+                       {"include_limits", &s->include_limits},
+                       {"include_equalities", &s->include_equalities},
+                       {"storage", &s->storage},
+                       {"dense_max_rows", &s->dense_max_rows},
+                       {"max_rel_warn", &s->max_rel_warn},
+                       {"print_summary", &s->print_summary}},
                       [s] { return validate(*s); });
 }
 

@@ -55,7 +55,8 @@ std::string resolveSceneDir(const SimulatorSettings& settings) {
   if (!settings.scene_dir.empty()) return settings.scene_dir;
   const std::string package = ros::package::getPath("lcp_contact_solver");
   if (package.empty())
-    throw std::invalid_argument("parameter scene_dir is not set and the package lcp_contact_solver was not found");
+    throw std::invalid_argument(
+        "parameter scene_dir is not set and the package lcp_contact_solver was not found");
   return package + "/config/scenes";
 }
 
@@ -69,9 +70,13 @@ scene::Scene loadScene(const SimulatorSettings& settings) {
 
 std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings* s) {
   return loadSettings(pnh, s,
-                      {{"scene", &s->scene}, {"scene_dir", &s->scene_dir}, {"dt", &s->dt},
-                       {"marker_period", &s->marker_period}, {"min_subscribers", &s->min_subscribers},
-                       {"print_status", &s->print_status}, {"rest_linear_velocity", &s->rest_linear_velocity},
+                      {{"scene", &s->scene},
+                       {"scene_dir", &s->scene_dir},
+                       {"dt", &s->dt},
+                       {"marker_period", &s->marker_period},
+                       {"min_subscribers", &s->min_subscribers},
+                       {"print_status", &s->print_status},
+                       {"rest_linear_velocity", &s->rest_linear_velocity},
                        {"rest_angular_velocity", &s->rest_angular_velocity}},
                       [s] { return validate(*s); });
 }
@@ -107,8 +112,14 @@ void SceneSimulatorNode::onSolverStats(const lcp_contact_solver::SolverStats& ms
 bool SceneSimulatorNode::run() {
   const scene::Scene& s = sim_->scene();
   std::ostringstream run_length, rate;
-  if (settings_.duration > 0.0) run_length << settings_.duration << " s"; else run_length << "unbounded";
-  if (settings_.rate_factor > 0.0) rate << settings_.rate_factor; else rate << "as fast as possible";
+  if (settings_.duration > 0.0)
+    run_length << settings_.duration << " s";
+  else
+    run_length << "unbounded";
+  if (settings_.rate_factor > 0.0)
+    rate << settings_.rate_factor;
+  else
+    rate << "as fast as possible";
   ROS_INFO_STREAM("Scene '" << s.name << "': " << s.bodies.size() << " bodies (" << s.dynamicBodyCount()
                             << " dynamic), dt " << dt_ << " s, duration " << run_length.str()
                             << ", real-time factor " << rate.str());
@@ -151,7 +162,8 @@ scene::StepStats SceneSimulatorNode::step() {
 }
 
 // Sends the step's problem and leaves the solver's forces in λ, or λ = 0 after a miss.
-void SceneSimulatorNode::exchange(const scene::StepProblem& sp, const ros::Time& stamp, Eigen::VectorXd* lambda) {
+void SceneSimulatorNode::exchange(const scene::StepProblem& sp, const ros::Time& stamp,
+                                  Eigen::VectorXd* lambda) {
   std_msgs::Header header;
   header.stamp = stamp;
   header.frame_id = settings_.frame_id;
@@ -175,7 +187,8 @@ void SceneSimulatorNode::exchange(const scene::StepProblem& sp, const ros::Time&
       last_miss_ = at + ": no forces within " + std::to_string(settings_.force_timeout) + " s";
       ROS_WARN_STREAM_THROTTLE(1.0, "No forces for the " << at << " within " << settings_.force_timeout
                                                          << " s; integrating without contact forces ("
-                                                         << link_.counters().force_timeouts << " timeouts so far)");
+                                                         << link_.counters().force_timeouts
+                                                         << " timeouts so far)");
       break;
     case SolverLink::Outcome::kNoSolver:
       last_miss_ = at + ": no solver publishes " + link_.forcesTopic();
@@ -184,11 +197,11 @@ void SceneSimulatorNode::exchange(const scene::StepProblem& sp, const ros::Time&
       break;
     case SolverLink::Outcome::kSolverFailed:
       last_miss_ = at + ": " + link_.failure();
-      ROS_WARN_STREAM_THROTTLE(1.0, "The solver gave no forces for the " << at << " (" << link_.failure()
-                                                                         << "); integrating without contact forces");
+      ROS_WARN_STREAM_THROTTLE(1.0, "The solver gave no forces for the "
+                                        << at << " (" << link_.failure()
+                                        << "); integrating without contact forces");
       break;
-    case SolverLink::Outcome::kShutdown:
-      break;
+    case SolverLink::Outcome::kShutdown: break;
   }
 }
 
@@ -210,12 +223,14 @@ void SceneSimulatorNode::publishState(const ros::Time& stamp) {
   header.frame_id = settings_.frame_id;
   std::vector<geometry_msgs::TransformStamped> transforms;
   for (const scene::RigidBody& body : sim_->scene().bodies)
-    if (!body.is_static && body.name != settings_.frame_id) transforms.push_back(toTransformMsg(body, header));
+    if (!body.is_static && body.name != settings_.frame_id)
+      transforms.push_back(toTransformMsg(body, header));
   if (!transforms.empty()) tf_.sendTransform(transforms);
 
   const double t = stamp.toSec();
   if (t + 1e-9 >= next_marker_time_ && markers_pub_.getNumSubscribers() > 0) {
-    markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(bodyMarkers(sim_->scene(), header)));
+    markers_pub_.publish(
+        boost::make_shared<visualization_msgs::MarkerArray>(bodyMarkers(sim_->scene(), header)));
     next_marker_time_ = t + settings_.marker_period;
   }
 }
@@ -252,8 +267,8 @@ void SceneSimulatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   if (link_.counters().misses() > 0) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                     "%ld of %ld steps with contacts integrated without contact forces; last: %s",
-                    static_cast<long>(link_.counters().misses()), static_cast<long>(counters_.steps_with_contacts),
-                    last_miss_.c_str());
+                    static_cast<long>(link_.counters().misses()),
+                    static_cast<long>(counters_.steps_with_contacts), last_miss_.c_str());
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "every step with contacts got its forces");
   }
@@ -277,22 +292,25 @@ void SceneSimulatorNode::writeSummary(std::ostream& out) const {
     text << " in " << run_wall_time_ << " s wall (real-time factor " << sim_->time() / run_wall_time_ << ")";
   text << "\nforces: " << counters_.forces_applied << " of " << counters_.steps_with_contacts
        << " steps with contacts from the solver; " << link_.counters().force_timeouts << " timeouts, "
-       << link_.counters().solver_failures << " solver failures, " << link_.counters().bad_forces << " mismatched\n";
+       << link_.counters().solver_failures << " solver failures, " << link_.counters().bad_forces
+       << " mismatched\n";
   std::size_t width = 4;
   for (const scene::RigidBody& b : s.bodies)
     if (!b.is_static) width = std::max(width, b.name.size());
   text << std::left << std::setw(static_cast<int>(width)) << "body" << std::right << std::setw(10) << "x [m]"
-       << std::setw(10) << "y [m]" << std::setw(10) << "z [m]" << std::setw(12) << "|v| [m/s]" << std::setw(13)
-       << "|w| [rad/s]" << "  state\n";
+       << std::setw(10) << "y [m]" << std::setw(10) << "z [m]" << std::setw(12) << "|v| [m/s]"
+       << std::setw(13) << "|w| [rad/s]"
+       << "  state\n";
   for (const scene::RigidBody& b : s.bodies) {
     if (b.is_static) continue;
     const double v = b.linear_velocity.norm(), w = b.angular_velocity.norm();
     const bool at_rest = v < settings_.rest_linear_velocity && w < settings_.rest_angular_velocity;
     auto shown = [](double x) { return std::abs(x) < 5e-5 ? 0.0 : x; };  // no "-0.0000"
     text << std::left << std::setw(static_cast<int>(width)) << b.name << std::right << std::fixed
-         << std::setprecision(4) << std::setw(10) << shown(b.position.x()) << std::setw(10) << shown(b.position.y())
-         << std::setw(10) << shown(b.position.z()) << std::scientific << std::setprecision(2) << std::setw(12) << v
-         << std::setw(13) << w << "  " << (at_rest ? "at rest" : "moving") << '\n';
+         << std::setprecision(4) << std::setw(10) << shown(b.position.x()) << std::setw(10)
+         << shown(b.position.y()) << std::setw(10) << shown(b.position.z()) << std::scientific
+         << std::setprecision(2) << std::setw(12) << v << std::setw(13) << w << "  "
+         << (at_rest ? "at rest" : "moving") << '\n';
   }
   out << text.str();
 }

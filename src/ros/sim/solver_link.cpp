@@ -35,17 +35,21 @@ const char* expectedValue(const std::variant<double*, int*, bool*, std::string*>
 std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamField> fields) {
   for (const ParamField& field : fields) {
     if (!pnh.hasParam(field.name)) continue;
-    const bool read = std::visit([&](auto* setting) { return pnh.getParam(field.name, *setting); }, field.setting);
+    const bool read =
+        std::visit([&](auto* setting) { return pnh.getParam(field.name, *setting); }, field.setting);
     if (!read) return "parameter " + pnh.resolveName(field.name) + " must be " + expectedValue(field.setting);
   }
   return "";
 }
 
 std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* s) {
-  const std::string error = readParams(pnh, {{"duration", &s->duration}, {"rate_factor", &s->rate_factor},
+  const std::string error = readParams(pnh, {{"duration", &s->duration},
+                                             {"rate_factor", &s->rate_factor},
                                              {"force_timeout", &s->force_timeout},
-                                             {"wait_for_solver", &s->wait_for_solver}, {"linger", &s->linger},
-                                             {"frame_id", &s->frame_id}, {"publish_clock", &s->publish_clock},
+                                             {"wait_for_solver", &s->wait_for_solver},
+                                             {"linger", &s->linger},
+                                             {"frame_id", &s->frame_id},
+                                             {"publish_clock", &s->publish_clock},
                                              {"status_period", &s->status_period}});
   return error.empty() ? validateLinkSettings(*s) : error;
 }
@@ -129,21 +133,21 @@ bool SolverLink::waitForSolver() {
     const double waited = (ros::WallTime::now() - start).toSec();
     if (!forever && waited >= settings_.wait_for_solver) break;
     if (!told && waited > 1.0) {
-      ROS_INFO_STREAM("Waiting for the contact solver: " << contacts_pub_.getNumSubscribers() << " of "
-                                                         << options_.min_subscribers << " subscribers on "
-                                                         << contacts_pub_.getTopic() << ", "
-                                                         << forces_sub_.getNumPublishers() << " publisher of "
-                                                         << forces_sub_.getTopic());
+      ROS_INFO_STREAM("Waiting for the contact solver: "
+                      << contacts_pub_.getNumSubscribers() << " of " << options_.min_subscribers
+                      << " subscribers on " << contacts_pub_.getTopic() << ", "
+                      << forces_sub_.getNumPublishers() << " publisher of " << forces_sub_.getTopic());
       told = true;
     }
     serve(kSpinSlice);
   }
   if (connected()) return true;
   if (ros::ok())
-    ROS_FATAL_STREAM("No contact solver within " << settings_.wait_for_solver << " s: " << contacts_pub_.getTopic()
-                                                 << " has " << contacts_pub_.getNumSubscribers() << " subscribers ("
-                                                 << options_.min_subscribers << " needed), " << forces_sub_.getTopic()
-                                                 << " has " << forces_sub_.getNumPublishers() << " publishers");
+    ROS_FATAL_STREAM("No contact solver within "
+                     << settings_.wait_for_solver << " s: " << contacts_pub_.getTopic() << " has "
+                     << contacts_pub_.getNumSubscribers() << " subscribers (" << options_.min_subscribers
+                     << " needed), " << forces_sub_.getTopic() << " has " << forces_sub_.getNumPublishers()
+                     << " publishers");
   return false;
 }
 

@@ -131,7 +131,9 @@ std::string lcpSolveUsage() {
     if (spec.type == core::ParamType::kBool) {
       names += ", --no-" + kebab(spec.name);
     } else {
-      names += spec.type == core::ParamType::kEnum ? " NAME" : spec.type == core::ParamType::kInt ? " N" : " X";
+      names += spec.type == core::ParamType::kEnum  ? " NAME"
+               : spec.type == core::ParamType::kInt ? " N"
+                                                    : " X";
     }
     usage << "  " << names << "\n      " << spec.doc << "; default " << spec.default_text << "\n";
   }
@@ -159,8 +161,8 @@ int nameWidth(const std::vector<std::string>& files) {
 }
 
 // One file: read, solve, print. Returns false if it could not be read or solved.
-bool solveFile(const std::string& file, const LcpSolveOptions& options, int name_width,
-               bool* header_written, bool* converged, std::ostream& out, std::ostream& err) {
+bool solveFile(const std::string& file, const LcpSolveOptions& options, int name_width, bool* header_written,
+               bool* converged, std::ostream& out, std::ostream& err) {
   core::Problem problem;
   try {
     problem = core::readProblemFile(file);
@@ -199,7 +201,8 @@ bool solveFile(const std::string& file, const LcpSolveOptions& options, int name
 int runLcpSolve(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   LcpSolveOptions options;
   if (const std::string why = parseArgs(args, &options); !why.empty()) {
-    err << kProgram << ": " << why << "\n" << "Try '" << kProgram << " --help'.\n";
+    err << kProgram << ": " << why << "\n"
+        << "Try '" << kProgram << " --help'.\n";
     return kExitUsage;
   }
   if (options.help) {

@@ -18,9 +18,7 @@ std::string formatNumber(const char* format, double value) {
 }
 
 // Full precision for JSON; never NaN/Inf, which JSON cannot hold.
-std::string jsonNumber(double value) {
-  return std::isfinite(value) ? formatNumber("%.17g", value) : "null";
-}
+std::string jsonNumber(double value) { return std::isfinite(value) ? formatNumber("%.17g", value) : "null"; }
 
 std::string jsonString(const std::string& text) {
   std::string quoted = "\"";
@@ -94,15 +92,14 @@ std::string tableLine(int name_width, const std::vector<std::string>& cells) {
 }  // namespace
 
 std::string formatTableHeader(int name_width) {
-  return tableLine(name_width, {"problem", "contacts", "rows", "solver", "iters", "residual",
-                                "converged", "status", "time_s"});
+  return tableLine(name_width, {"problem", "contacts", "rows", "solver", "iters", "residual", "converged",
+                                "status", "time_s"});
 }
 
 std::string formatTableRow(const core::Problem& problem, const core::SolveResult& result, int name_width) {
   return tableLine(name_width,
-                   {problem.name, std::to_string(problem.contacts.size()),
-                    std::to_string(problem.rowCount()), result.solver,
-                    std::to_string(result.iterations), formatNumber("%.3e", result.residual),
+                   {problem.name, std::to_string(problem.contacts.size()), std::to_string(problem.rowCount()),
+                    result.solver, std::to_string(result.iterations), formatNumber("%.3e", result.residual),
                     result.converged ? "yes" : "no", core::statusName(result.status),
                     formatNumber("%.6f", result.solve_time)});
 }
@@ -128,9 +125,8 @@ std::string formatJsonLine(const core::Problem& problem, const core::SolveResult
 }
 
 std::string formatResidualHistory(const core::Problem& problem, const core::SolveResult& result) {
-  std::string text = problem.name + ": residual history (" +
-                     std::to_string(result.residual_history.size()) + " entries, solver " +
-                     result.solver + ")\n";
+  std::string text = problem.name + ": residual history (" + std::to_string(result.residual_history.size()) +
+                     " entries, solver " + result.solver + ")\n";
   for (std::size_t k = 0; k < result.residual_history.size(); ++k)
     text += "  " + padLeft(std::to_string(k + 1), 6) + " " +
             formatNumber("%.6e", result.residual_history[k]) + "\n";

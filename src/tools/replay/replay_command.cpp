@@ -1,9 +1,9 @@
 // The `replay` command: its command line (CLI11), the parameters it assembles and what it prints.
 #include "replay/replay_command.h"
 
+#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "lcp_contact_solver/ros/replay/params_file.h"
 #include "lcp_contact_solver/ros/replay/text.h"
-#include "lcp_contact_solver/ros/node/solver_params_ros.h"
 #include "replay/summary.h"
 
 #include <CLI/CLI.hpp>
@@ -96,7 +96,10 @@ std::string parseCommandLine(const std::vector<std::string>& args, ReplayCommand
   } catch (const CLI::ArgumentMismatch& e) {  // CLI11 says "--name: 1 required TEXT missing"
     const std::string what = e.what(), name = what.substr(0, what.find(':'));
     const bool topic = name.size() > 6 && name.compare(name.size() - 6, 6, "-topic") == 0;
-    return name + " needs " + (name == "--tolerance-compare" ? "a number" : topic ? "a topic" : "a file name");
+    return name + " needs " +
+           (name == "--tolerance-compare" ? "a number"
+            : topic                       ? "a topic"
+                                          : "a file name");
   } catch (const CLI::ParseError& e) {
     return e.what();
   }
@@ -113,22 +116,28 @@ std::string parseCommandLine(const std::vector<std::string>& args, ReplayCommand
     cli->have_tolerance = true;
   }
   for (const std::string& arg : positionals) {
-    if (o.bag.empty()) o.bag = arg;
-    else if (arg.find('=') != std::string::npos) cli->overrides.push_back(arg);
-    else return "unexpected argument '" + arg + "' (one bag; parameter overrides are name=value)";
+    if (o.bag.empty())
+      o.bag = arg;
+    else if (arg.find('=') != std::string::npos)
+      cli->overrides.push_back(arg);
+    else
+      return "unexpected argument '" + arg + "' (one bag; parameter overrides are name=value)";
   }
   if (o.bag.empty()) return "no input bag given";
-  if (!cli->params_file.empty() && cli->no_params_file) return "--params and --no-params-file exclude each other";
+  if (!cli->params_file.empty() && cli->no_params_file)
+    return "--params and --no-params-file exclude each other";
   return "";
 }
 
 // The node's defaults, then the parameter file (--params, or the one beside the bag), then
 // the overrides. False after writing the error.
-bool assembleParams(ReplayCommandLine* cli, lcs::core::SolverParams* params, std::string* source, std::ostream& err) {
+bool assembleParams(ReplayCommandLine* cli, lcs::core::SolverParams* params, std::string* source,
+                    std::ostream& err) {
   *params = defaultSolverParams();
   *source = "the node's defaults";
   const std::string beside = paramsFileBeside(cli->options.bag);
-  if (cli->params_file.empty() && !cli->no_params_file && std::filesystem::exists(beside)) cli->params_file = beside;
+  if (cli->params_file.empty() && !cli->no_params_file && std::filesystem::exists(beside))
+    cli->params_file = beside;
   if (!cli->params_file.empty()) {
     if (const std::string error = loadParamsFile(cli->params_file, params); !error.empty()) {
       err << "replay: " << error << "\n";
@@ -163,8 +172,8 @@ void printReport(const ReplayOptions& options, const ReplayResult& result, std::
 // The verdict on one comparison: true when within `tolerance`.
 bool judge(double tolerance, const Comparison& c, const std::string& what, std::ostream& out) {
   if (!c.hasReference()) {
-    out << "FAIL: no " << (what == "recording" ? "recorded forces" : what + " forces") << " to compare with (--tolerance-compare "
-        << shortNumber(tolerance) << ")\n";
+    out << "FAIL: no " << (what == "recording" ? "recorded forces" : what + " forces")
+        << " to compare with (--tolerance-compare " << shortNumber(tolerance) << ")\n";
     return false;
   }
   if (c.exceeds(tolerance)) {
@@ -184,11 +193,13 @@ bool judge(double tolerance, const Comparison& c, const std::string& what, std::
 // --tolerance-compare: 0 when the forces match (the reference when there is one, else the
 // recording) and every recorded answer checked passed, 1 otherwise.
 int verdict(double tolerance, const ReplayResult& result, std::ostream& out) {
-  bool ok = result.reference_topic.empty() ? judge(tolerance, result.comparison, "recording", out)
-                                           : judge(tolerance, result.reference, "reference " + result.reference_topic, out);
+  bool ok = result.reference_topic.empty()
+                ? judge(tolerance, result.comparison, "recording", out)
+                : judge(tolerance, result.reference, "reference " + result.reference_topic, out);
   const AnswerChecks& a = result.answers;
   if (a.checked > 0 && !a.passed()) {
-    out << "FAIL: " << a.failed << " of " << a.checked << " recorded answers fail their check (" << a.first_failure << ")\n";
+    out << "FAIL: " << a.failed << " of " << a.checked << " recorded answers fail their check ("
+        << a.first_failure << ")\n";
     ok = false;
   }
   return ok ? 0 : 1;
@@ -219,9 +230,9 @@ int runReplayCommand(const std::vector<std::string>& args, std::ostream& out, st
     };
   if (!cli.quiet) {
     out << "replay " << options.bag << "\n"
-        << "parameters: " << params_source << " (solver " << lcs::core::solverName(params.solver) << ", tolerance "
-        << shortNumber(params.tolerance) << ", maxIt " << params.maxIt << ", mu " << shortNumber(params.mu)
-        << ", initial_guess " << (params.initial_guess ? "true" : "false") << ")\n";
+        << "parameters: " << params_source << " (solver " << lcs::core::solverName(params.solver)
+        << ", tolerance " << shortNumber(params.tolerance) << ", maxIt " << params.maxIt << ", mu "
+        << shortNumber(params.mu) << ", initial_guess " << (params.initial_guess ? "true" : "false") << ")\n";
     out.flush();
   }
   const ReplayResult result = replayBag(options, params);
@@ -231,7 +242,8 @@ int runReplayCommand(const std::vector<std::string>& args, std::ostream& out, st
     return 2;
   }
   if (!options.out_bag.empty()) {
-    if (const std::string error = writeParamsFile(paramsFileBeside(options.out_bag), params); !error.empty()) {
+    if (const std::string error = writeParamsFile(paramsFileBeside(options.out_bag), params);
+        !error.empty()) {
       err << "replay: " << error << "\n";
       return 2;
     }

@@ -20,9 +20,9 @@ std::string formatSummary(const ReplayResult& r) {
   if (r.solved > 0) {
     out << "solves: " << r.converged << "/" << r.solved << " converged, " << r.with_forces
         << " with forces; iterations " << r.total_iterations << " in all, max " << r.max_iterations
-        << "; residual max " << shortNumber(r.max_residual) << " (stamp " << stampDigits(r.worst_residual_stamp)
-        << "), mean " << shortNumber(r.meanResidual()) << "; solve time " << shortNumber(r.total_solve_time)
-        << " s\n";
+        << "; residual max " << shortNumber(r.max_residual) << " (stamp "
+        << stampDigits(r.worst_residual_stamp) << "), mean " << shortNumber(r.meanResidual())
+        << "; solve time " << shortNumber(r.total_solve_time) << " s\n";
   }
   const Comparison& c = r.comparison;
   if (r.forces_topic.empty()) {
@@ -31,13 +31,13 @@ std::string formatSummary(const ReplayResult& r) {
     out << "forces vs recorded " << r.forces_topic << ": " << c.compared << " cycles compared";
     if (c.compared > 0) {
       out << "; max |dlambda| " << shortNumber(c.max_abs) << " N, RMS " << shortNumber(c.rms())
-          << " N, max relative " << shortNumber(c.max_relative) << " (worst cycle #" << c.worst_cycle << ", stamp "
-          << stampDigits(c.worst_stamp) << ")";
+          << " N, max relative " << shortNumber(c.max_relative) << " (worst cycle #" << c.worst_cycle
+          << ", stamp " << stampDigits(c.worst_stamp) << ")";
     }
     out << "\n";
     if (c.mismatched + c.missing_reference + c.missing_replay > 0) {
-      out << "forces not comparable: " << c.mismatched << " cycles with other contacts, " << c.missing_reference
-          << " replayed without a recorded counterpart, " << c.missing_replay
+      out << "forces not comparable: " << c.mismatched << " cycles with other contacts, "
+          << c.missing_reference << " replayed without a recorded counterpart, " << c.missing_replay
           << " recorded without a replayed counterpart; first: " << c.first_mismatch << "\n";
     }
   }
@@ -51,9 +51,9 @@ std::string formatSummary(const ReplayResult& r) {
     }
     out << "\n";
     if (ref.mismatched + ref.missing_reference + ref.missing_replay > 0) {
-      out << "reference not comparable: " << ref.mismatched << " cycles with other contacts, " << ref.missing_reference
-          << " replayed without a reference, " << ref.missing_replay << " references without a replayed cycle; first: "
-          << ref.first_mismatch << "\n";
+      out << "reference not comparable: " << ref.mismatched << " cycles with other contacts, "
+          << ref.missing_reference << " replayed without a reference, " << ref.missing_replay
+          << " references without a replayed cycle; first: " << ref.first_mismatch << "\n";
     }
   }
   const AnswerChecks& a = r.answers;
@@ -69,9 +69,10 @@ std::string formatSummary(const ReplayResult& r) {
     out << "\n";
   }
   if (!r.stats_topic.empty()) {
-    out << "stats vs recorded " << r.stats_topic << ": " << c.stats_compared << " cycles; iterations differ in "
-        << c.iteration_differences;
-    if (c.iteration_differences > 0) out << " (first at stamp " << stampDigits(c.first_iteration_difference) << ")";
+    out << "stats vs recorded " << r.stats_topic << ": " << c.stats_compared
+        << " cycles; iterations differ in " << c.iteration_differences;
+    if (c.iteration_differences > 0)
+      out << " (first at stamp " << stampDigits(c.first_iteration_difference) << ")";
     out << ", status differs in " << c.status_differences << "; max relative residual difference "
         << shortNumber(c.max_residual_relative) << "\n";
   }
@@ -84,8 +85,10 @@ std::string formatReferenceCycles(const ReplayResult& r) {
   out << "cycle stamp contacts max_abs_dlambda_N max_relative (vs " << r.reference_topic << ")\n";
   for (const CycleDifference& c : r.reference_cycles) {
     out << c.cycle << " " << stampDigits(c.stamp) << " " << c.contacts << " ";
-    if (c.mismatch.empty()) out << shortNumber(c.max_abs) << " " << shortNumber(c.relative) << "\n";
-    else out << "- - " << c.mismatch << "\n";
+    if (c.mismatch.empty())
+      out << shortNumber(c.max_abs) << " " << shortNumber(c.relative) << "\n";
+    else
+      out << "- - " << c.mismatch << "\n";
   }
   return out.str();
 }
@@ -102,8 +105,8 @@ void ProgressBar::update(std::size_t done) {
   last_permille_ = permille;
   constexpr int kWidth = 40;
   const int filled = permille * kWidth / 1000;
-  std::fprintf(stream_, "\rreplay [%.*s%*s] %3d%%  %zu/%zu", filled, "########################################",
-               kWidth - filled, "", permille / 10, done, total_);
+  std::fprintf(stream_, "\rreplay [%.*s%*s] %3d%%  %zu/%zu", filled,
+               "########################################", kWidth - filled, "", permille / 10, done, total_);
   std::fflush(stream_);
 }
 

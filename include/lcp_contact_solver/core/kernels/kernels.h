@@ -21,11 +21,11 @@ struct SolveContext {
   // hands every other kernel a problem with the assembled W.
   const Problem* problem = nullptr;
   const SolverParams* params = nullptr;
-  std::vector<int> offsets;   // first row of each contact, size nc + 1
-  std::vector<double> mu;     // effective μ per contact
-  std::vector<bool> ignored;  // contacts left out (minW, maxF): force stays zero
+  std::vector<int> offsets;     // first row of each contact, size nc + 1
+  std::vector<double> mu;       // effective μ per contact
+  std::vector<bool> ignored;    // contacts left out (minW, maxF): force stays zero
   double regularization = 0.0;  // r added to W's diagonal
-  int body_dof = 0;  // 6 × bodies when the body form is known: auto's rank-deficiency estimate
+  int body_dof = 0;             // 6 × bodies when the body form is known: auto's rank-deficiency estimate
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
@@ -43,11 +43,11 @@ struct SolveContext {
 struct KernelReport {
   SolveStatus status = SolveStatus::kMaxIterations;
   int iterations = 0;
-  double solver_error = 0.0;  // the kernel's own stopping measure at exit
-  std::string message;        // detail for failures
+  double solver_error = 0.0;    // the kernel's own stopping measure at exit
+  std::string message;          // detail for failures
   std::vector<double> history;  // residual per iteration when params->displayDebug
   FrictionModel friction_model = FrictionModel::kCoulombDisc;  // the law actually solved
-  std::vector<std::pair<std::string, double>> stages;  // auto: (member, seconds) per stage
+  std::vector<std::pair<std::string, double>> stages;          // auto: (member, seconds) per stage
 };
 
 // The two ends of a sweep loop that did not converge: the time budget ran out after `sweeps`,
@@ -56,8 +56,8 @@ inline void endOnTimeBudget(KernelReport& report, Eigen::VectorXd& lambda, const
                             double time_budget, int sweeps) {
   lambda = best;
   report.status = SolveStatus::kTimeBudget;
-  report.message = "time budget (" + std::to_string(time_budget) + " s) ran out after " + std::to_string(sweeps) +
-                   " sweeps; best iterate returned";
+  report.message = "time budget (" + std::to_string(time_budget) + " s) ran out after " +
+                   std::to_string(sweeps) + " sweeps; best iterate returned";
 }
 // A sweep whose maintained d says "converged" is confirmed on an exactly recomputed d (the
 // maintained one carries round-off): true when that residual meets the tolerance too.
@@ -67,7 +67,8 @@ inline bool confirmConverged(KernelReport& report, double exact_residual, double
   report.status = SolveStatus::kConverged;
   return true;
 }
-inline void endOnMaxIt(KernelReport& report, Eigen::VectorXd& lambda, const Eigen::VectorXd& best, int max_it) {
+inline void endOnMaxIt(KernelReport& report, Eigen::VectorXd& lambda, const Eigen::VectorXd& best,
+                       int max_it) {
   lambda = best;
   report.status = SolveStatus::kMaxIterations;
   report.message = "maxIt (" + std::to_string(max_it) + ") sweeps reached before the tolerance";

@@ -43,8 +43,7 @@ lcs::core::ContactType fromMsgType(std::uint8_t type);
 
 // Deterministic tangents of a unit normal: the core's rule (core/contact_frame.h), shared
 // with the scene layer so both derive the same friction rows.
-void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1,
-                    Eigen::Vector3d* tangent2);
+void deriveTangents(const Eigen::Vector3d& normal, Eigen::Vector3d* tangent1, Eigen::Vector3d* tangent2);
 
 // Reads one contact's geometry, normalizing the directions and deriving missing tangents.
 std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame);
@@ -54,9 +53,8 @@ std::string toContactFrame(const lcs::ContactPoint& contact, ContactFrame* frame
 // `max_rows` > 0 refuses larger problems. Stamps are not compared here. `validate` false
 // leaves out lcs::validateProblem (non-finite values in W and d_free): for a caller whose
 // next step is ContactSolver::solve, which runs the same check (CycleSolver).
-std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance,
-                      int max_rows, lcs::core::Problem* problem, std::vector<ContactFrame>* frames,
-                      bool validate = true);
+std::string toProblem(const lcs::ContactArray& contacts, const lcs::Compliance& compliance, int max_rows,
+                      lcs::core::Problem* problem, std::vector<ContactFrame>* frames, bool validate = true);
 
 // Body names of one contact, for toContactArrayMsg.
 struct ContactBodies {
@@ -68,7 +66,8 @@ struct ContactBodies {
 // d_free from `problem`; position, normal and tangents from `frames` (tangents zero where
 // derived_tangents: the reader derives the same); body names from `bodies`. `frames` and
 // `bodies` have one entry per contact.
-lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem, const std::vector<ContactFrame>& frames,
+lcs::ContactArray toContactArrayMsg(const lcs::core::Problem& problem,
+                                    const std::vector<ContactFrame>& frames,
                                     const std::vector<ContactBodies>& bodies, const std_msgs::Header& header);
 
 // The compliance message of a core matrix (dense, or block-sparse with the core's blocks).

@@ -5,8 +5,8 @@
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
+#include "lcp_contact_solver/ros/node/cycle_solver.h"
 #include "lcp_contact_solver/ros/node/input_queue.h"
 #include "lcp_contact_solver/ros/node/solve_rate_status.h"
 #include "lcp_contact_solver/ros/node/solver_params_ros.h"
@@ -50,8 +50,8 @@ class ContactSolverNode {
     std::uint64_t solves = 0;
     std::uint64_t not_converged = 0;
     std::uint64_t rejected = 0;
-    double max_latency = 0.0;     // since the last report, s
-    double max_queue_time = 0.0;  // since the last report, s
+    double max_latency = 0.0;                 // since the last report, s
+    double max_queue_time = 0.0;              // since the last report, s
     std::uint64_t problems_since_report = 0;  // rejections, unpaired, failed solves
     double last_residual = 0.0;
     std::string last_status = "no solve yet";

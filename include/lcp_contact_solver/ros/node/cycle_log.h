@@ -13,8 +13,8 @@ namespace lcs = ::lcp_contact_solver;
 
 // Index of the contact with the largest natural-map error (core residual.h, not
 // normalised), or -1 when every contact is ignored. `mu`: effective μ per contact.
-int worstContact(const lcs::core::Problem& problem, const lcs::core::SolveResult& result, const std::vector<double>& mu,
-                 double* error);
+int worstContact(const lcs::core::Problem& problem, const lcs::core::SolveResult& result,
+                 const std::vector<double>& mu, double* error);
 
 // Sizes, solver, iterations, residual, status and the worst contact.
 std::string cycleSummary(const lcs::core::Problem& problem, const lcs::core::SolveResult& result,

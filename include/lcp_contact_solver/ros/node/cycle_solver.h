@@ -24,9 +24,9 @@ struct CycleOutput {
   // Non-empty: the input was rejected (malformed messages, or refused by the core's own
   // checks) and nothing was solved; `stats` is then the rejection (status invalid_input).
   std::string error;
-  lcs::core::Problem problem;               // the converted problem (empty when rejected early)
-  std::vector<ContactFrame> frames;   // one per contact, from toProblem
-  lcs::core::SolveResult result;            // the core's result (when solved)
+  lcs::core::Problem problem;             // the converted problem (empty when rejected early)
+  std::vector<ContactFrame> frames;       // one per contact, from toProblem
+  lcs::core::SolveResult result;          // the core's result (when solved)
   lcp_contact_solver::SolverStats stats;  // as the node publishes it on ~stats
   // The solve gave forces worth publishing (solveGaveForces) ...
   bool gave_forces = false;

@@ -47,9 +47,9 @@ struct UnsolvedInput {
 struct InputCounts {
   std::uint64_t arrays_received = 0;
   std::uint64_t compliances_received = 0;
-  std::uint64_t taken = 0;     // handed to the solver (then solved or rejected there)
-  std::uint64_t unpaired = 0;  // no compliance within the window
-  std::uint64_t dropped = 0;   // the node was behind
+  std::uint64_t taken = 0;                 // handed to the solver (then solved or rejected there)
+  std::uint64_t unpaired = 0;              // no compliance within the window
+  std::uint64_t dropped = 0;               // the node was behind
   std::uint64_t compliances_unpaired = 0;  // a compliance whose array never came
   std::uint64_t waiting() const { return arrays_received - taken - unpaired - dropped; }
 };

@@ -33,8 +33,7 @@ visualization_msgs::MarkerArray buildMarkers(const std_msgs::Header& header,
                                              const std::vector<ContactFrame>& frames,
                                              const lcs::core::Problem& problem,
                                              const lcs::core::SolveResult& result,
-                                             const std::vector<double>& mu,
-                                             const DisplayOptions& options);
+                                             const std::vector<double>& mu, const DisplayOptions& options);
 
 // Open grey, stick green, slip orange, ignored blue.
 std_msgs::ColorRGBA stateColor(lcs::core::ContactState state);

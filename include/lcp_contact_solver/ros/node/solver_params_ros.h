@@ -4,8 +4,8 @@
 // from the service's "name=value" overrides, and validated before use.
 #pragma once
 
-#include "lcp_contact_solver/ros/node/input_queue.h"
 #include "lcp_contact_solver/core/solver_params.h"
+#include "lcp_contact_solver/ros/node/input_queue.h"
 
 #include <lcp_contact_solver/ContactSolverConfig.h>
 #include <ros/node_handle.h>
@@ -22,11 +22,11 @@ namespace lcs = ::lcp_contact_solver;
 struct DisplayOptions {
   double force_arrow_scale = 0.01;  // m per N
   bool show_w_heatmap = true;
-  double showCellWidth = 0.0;  // m; SOFA's default, <= 0 hides the heat map
+  double showCellWidth = 0.0;                              // m; SOFA's default, <= 0 hides the heat map
   std::array<double, 3> showTranslation{{0.0, 0.0, 0.0}};  // m, header frame
-  int heatmap_max_rows = 64;   // the heat map shows the leading rows only
-  double cone_height = 0.05;   // m
-  double marker_lifetime = 0.5;  // s
+  int heatmap_max_rows = 64;                               // the heat map shows the leading rows only
+  double cone_height = 0.05;                               // m
+  double marker_lifetime = 0.5;                            // s
 };
 
 // SOFA's defaults, with the node's row limit.
@@ -39,7 +39,7 @@ struct NodeSettings {
   int queue_size = 10;
   // What the node does when pairs come faster than it solves (input_queue.h).
   OverloadPolicy overload = OverloadPolicy::kQueue;
-  double diagnostics_min_rate = 1.0;   // Hz
+  double diagnostics_min_rate = 1.0;     // Hz
   double diagnostics_max_rate = 2000.0;  // Hz
 };
 

@@ -28,13 +28,13 @@ namespace lcs = ::lcp_contact_solver;
 
 // One answer.
 struct AnswerCheck {
-  std::string unfit;              // non-empty: the forces do not fit the problem (counts, ids, rows, NaN)
-  double residual = 0.0;          // recomputed (dimensionless, as SolverStats::residual)
+  std::string unfit;      // non-empty: the forces do not fit the problem (counts, ids, rows, NaN)
+  double residual = 0.0;  // recomputed (dimensionless, as SolverStats::residual)
   std::size_t state_differences = 0;
-  std::size_t negative_normals = 0;   // unilateral rows with λ < 0
-  std::size_t outside_cone = 0;       // friction beyond μ λ_n
+  std::size_t negative_normals = 0;  // unilateral rows with λ < 0
+  std::size_t outside_cone = 0;      // friction beyond μ λ_n
   std::size_t ignored_with_force = 0;
-  std::string first_violation;    // the first of the above, with its contact
+  std::string first_violation;  // the first of the above, with its contact
 
   bool invariantsHold() const {
     return unfit.empty() && state_differences + negative_normals + outside_cone + ignored_with_force == 0;
@@ -53,19 +53,19 @@ bool residualsAgree(double recomputed, double reported);
 // Over a whole replay: every recorded answer of the bag (cycles with recorded forces).
 struct AnswerChecks {
   std::size_t checked = 0;
-  std::size_t failed = 0;               // answers with at least one of the faults below
+  std::size_t failed = 0;  // answers with at least one of the faults below
   std::size_t unfit = 0;
-  std::size_t residual_differs = 0;     // recomputed ≠ the recorded SolverStats' residual
-  std::size_t above_tolerance = 0;      // recorded as converged, recomputed residual > tolerance
-  std::size_t invariant_failures = 0;   // states, signs, cone, ignored
-  std::size_t without_stats = 0;        // no recorded SolverStats to hold the residual to
-  double max_residual = 0.0;            // recomputed
-  double max_residual_difference = 0.0; // |recomputed − reported|
-  std::string first_failure;            // with its stamp
+  std::size_t residual_differs = 0;      // recomputed ≠ the recorded SolverStats' residual
+  std::size_t above_tolerance = 0;       // recorded as converged, recomputed residual > tolerance
+  std::size_t invariant_failures = 0;    // states, signs, cone, ignored
+  std::size_t without_stats = 0;         // no recorded SolverStats to hold the residual to
+  double max_residual = 0.0;             // recomputed
+  double max_residual_difference = 0.0;  // |recomputed − reported|
+  std::string first_failure;             // with its stamp
 
   // `stats` may be null. Returns false when this answer failed.
-  bool add(const AnswerCheck& check, const lcp_contact_solver::SolverStats* stats, const lcs::core::SolverParams& params,
-           const ros::Time& stamp);
+  bool add(const AnswerCheck& check, const lcp_contact_solver::SolverStats* stats,
+           const lcs::core::SolverParams& params, const ros::Time& stamp);
   bool passed() const { return failed == 0; }
 };
 

@@ -28,9 +28,9 @@
 namespace lcp_contact_solver_ros {
 
 struct ReplayOptions {
-  std::string bag;          // input
-  std::string out_bag;      // "" = none
-  std::string csv;          // "" = none
+  std::string bag;      // input
+  std::string out_bag;  // "" = none
+  std::string csv;      // "" = none
   // Input topics; an unset one is looked up by name ("contacts", "compliance") and, when
   // no topic has that name, by message type when exactly one topic has it.
   std::string contacts_topic, compliance_topic;
@@ -45,32 +45,32 @@ struct ReplayOptions {
   // set, every recorded answer (forces_topic, with its stats) is checked on its own problem
   // (answer_check.h) into ReplayResult::answers, independently of the replay's solve.
   std::optional<lcs::core::SolverParams> recorded_params;
-  bool copy_inputs = true;  // the output bag also holds the input topics (replayable)
-  bool keep_cycles = false; // keep every cycle's output in ReplayResult::cycles
+  bool copy_inputs = true;   // the output bag also holds the input topics (replayable)
+  bool keep_cycles = false;  // keep every cycle's output in ReplayResult::cycles
   // Called after each contact array read: (arrays read, arrays in the bag). Empty: none.
   std::function<void(std::size_t done, std::size_t total)> progress;
 };
 
 struct ReplayCycle {
   ros::Time stamp;
-  ros::Time bag_time;                      // receipt of the message that completed the pair
-  lcp_contact_solver::SolverStats stats;   // as the node publishes it
+  ros::Time bag_time;                     // receipt of the message that completed the pair
+  lcp_contact_solver::SolverStats stats;  // as the node publishes it
   bool has_forces = false;
   lcp_contact_solver::ConstraintForces forces;
 };
 
 struct ReplayResult {
-  std::string error;  // non-empty: the replay did not run (file, bag format, topics, output)
+  std::string error;               // non-empty: the replay did not run (file, bag format, topics, output)
   std::vector<std::string> notes;  // topic choices and other remarks
   std::string contacts_topic, compliance_topic, forces_topic, stats_topic, reference_topic;  // "" = none
   std::string out_forces_topic, out_stats_topic;
   std::size_t contact_messages = 0, compliance_messages = 0;
-  std::size_t cycles = 0;     // pairs solved or rejected
-  std::size_t solved = 0;     // the core ran
-  std::size_t rejected = 0;   // invalid input
+  std::size_t cycles = 0;    // pairs solved or rejected
+  std::size_t solved = 0;    // the core ran
+  std::size_t rejected = 0;  // invalid input
   std::size_t with_forces = 0;
   std::size_t converged = 0;
-  std::size_t unpaired = 0;   // contact arrays without compliance
+  std::size_t unpaired = 0;  // contact arrays without compliance
   std::size_t unused_compliance = 0;
   std::size_t duplicates = 0;
   double max_residual = 0.0, sum_residual = 0.0;

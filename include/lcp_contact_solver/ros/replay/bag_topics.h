@@ -17,18 +17,20 @@ std::string normalizeTopic(const std::string& name);
 // optional), else the default name, else the only topic of that type. "" when there is none
 // and it is optional. `exclude` (may be empty) is never chosen by name or type. `option`
 // names the command-line option that chooses the topic (in notes and errors).
-std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& type,
-                        const std::string& md5, const std::string& requested, const std::string& default_name,
-                        const std::string& option, bool required, std::vector<std::string>* notes,
-                        std::string* error, const std::string& exclude = "");
+std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections,
+                        const std::string& type, const std::string& md5, const std::string& requested,
+                        const std::string& default_name, const std::string& option, bool required,
+                        std::vector<std::string>* notes, std::string* error, const std::string& exclude = "");
 
 // The same for message type M.
 template <typename M>
-std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections, const std::string& requested,
-                        const std::string& default_name, const std::string& option, bool required,
-                        std::vector<std::string>* notes, std::string* error, const std::string& exclude = "") {
-  return chooseTopic(connections, ros::message_traits::DataType<M>::value(), ros::message_traits::MD5Sum<M>::value(),
-                     requested, default_name, option, required, notes, error, exclude);
+std::string chooseTopic(const std::vector<const rosbag::ConnectionInfo*>& connections,
+                        const std::string& requested, const std::string& default_name,
+                        const std::string& option, bool required, std::vector<std::string>* notes,
+                        std::string* error, const std::string& exclude = "") {
+  return chooseTopic(connections, ros::message_traits::DataType<M>::value(),
+                     ros::message_traits::MD5Sum<M>::value(), requested, default_name, option, required,
+                     notes, error, exclude);
 }
 
 }  // namespace lcp_contact_solver_ros

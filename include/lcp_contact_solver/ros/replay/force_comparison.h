@@ -32,28 +32,28 @@ double relativeDifference(double a, double b);
 // One cycle of a comparison (kept per cycle for the reference topic).
 struct CycleDifference {
   ros::Time stamp;
-  long cycle = -1;            // index in replay order; -1: a reference stamp no cycle had
-  std::size_t contacts = 0;   // the replay's contacts (0 when it gave no forces)
+  long cycle = -1;           // index in replay order; -1: a reference stamp no cycle had
+  std::size_t contacts = 0;  // the replay's contacts (0 when it gave no forces)
   // Non-empty: not comparable (counts, ids or rows differ, or forces on one side only).
   std::string mismatch;
-  double max_abs = 0.0;       // N
-  double relative = 0.0;      // +inf when not comparable
+  double max_abs = 0.0;   // N
+  double relative = 0.0;  // +inf when not comparable
 };
 
 // The comparison of a whole replay with forces in the bag.
 struct Comparison {
   // Forces (cycles whose stamp has forces on both sides).
   std::size_t compared = 0;
-  std::size_t mismatched = 0;          // counts, ids or rows differ
-  std::size_t missing_reference = 0;   // replay gave forces, the bag has none for that stamp
-  std::size_t missing_replay = 0;      // the bag has forces the replay did not produce
-  double max_abs = 0.0;                // N
+  std::size_t mismatched = 0;         // counts, ids or rows differ
+  std::size_t missing_reference = 0;  // replay gave forces, the bag has none for that stamp
+  std::size_t missing_replay = 0;     // the bag has forces the replay did not produce
+  double max_abs = 0.0;               // N
   double sum_sq = 0.0;
   std::size_t values = 0;
   double max_relative = 0.0;
-  ros::Time worst_stamp;               // cycle of max_relative
-  long worst_cycle = -1;               // its index in replay order
-  std::string first_mismatch;          // the first mismatch, with its stamp
+  ros::Time worst_stamp;       // cycle of max_relative
+  long worst_cycle = -1;       // its index in replay order
+  std::string first_mismatch;  // the first mismatch, with its stamp
   // Stats (solved cycles with a recorded SolverStats of the same stamp).
   std::size_t stats_compared = 0;
   std::size_t iteration_differences = 0;
@@ -64,8 +64,8 @@ struct Comparison {
   // Adds one cycle: the forces of both sides (either may be null: forces on one side only).
   // Returns the cycle's figures.
   CycleDifference add(const lcp_contact_solver::ConstraintForces* replayed,
-                      const lcp_contact_solver::ConstraintForces* reference, const ros::Time& stamp, long cycle,
-                      const std::string& why_no_replay = "");
+                      const lcp_contact_solver::ConstraintForces* reference, const ros::Time& stamp,
+                      long cycle, const std::string& why_no_replay = "");
 
   double rms() const { return values > 0 ? std::sqrt(sum_sq / static_cast<double>(values)) : 0.0; }
   // Something to compare with was found in the bag.

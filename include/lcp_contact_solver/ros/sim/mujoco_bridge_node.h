@@ -49,11 +49,11 @@ namespace lcs = ::lcp_contact_solver;
 struct MujocoBridgeCounters {
   std::int64_t steps = 0;
   std::int64_t steps_with_rows = 0;
-  std::int64_t forces_applied = 0;   // steps whose forces came (drive: integrated with them)
-  std::int64_t extract_errors = 0;   // steps whose MuJoCo rows could not be converted
-  std::int64_t fallbacks = 0;        // drive: steps integrated with MuJoCo's own solver
-  std::int64_t compared = 0;         // steps compared with MuJoCo's forces
-  std::int64_t over_warn = 0;        // compared steps above ~max_rel_warn
+  std::int64_t forces_applied = 0;  // steps whose forces came (drive: integrated with them)
+  std::int64_t extract_errors = 0;  // steps whose MuJoCo rows could not be converted
+  std::int64_t fallbacks = 0;       // drive: steps integrated with MuJoCo's own solver
+  std::int64_t compared = 0;        // steps compared with MuJoCo's forces
+  std::int64_t over_warn = 0;       // compared steps above ~max_rel_warn
 };
 
 // Figures of the run (the summary).
@@ -61,11 +61,12 @@ struct MujocoBridgeTotals {
   int max_contacts = 0, last_contacts = 0, max_rows = 0;
   double max_residual = 0.0, last_residual = 0.0;
   double max_abs_diff = 0.0, max_rel_diff = 0.0;
-  double state_max_rel[lcs::core::kContactStateCount] = {};  // per contact state (open, stick, slip, ignored, closed)
+  double state_max_rel[lcs::core::kContactStateCount] =
+      {};  // per contact state (open, stick, slip, ignored, closed)
   std::int64_t state_count[lcs::core::kContactStateCount] = {};
   double max_penetration = 0.0, last_penetration = 0.0;
   double first_energy = 0.0, last_energy = 0.0;
-  double our_solve_time = 0.0;     // s, summed (from the solver's stats)
+  double our_solve_time = 0.0;  // s, summed (from the solver's stats)
   std::int64_t our_solves = 0;
   double mujoco_solve_time = 0.0;  // s, summed
   std::int64_t mujoco_solves = 0;
@@ -98,7 +99,8 @@ class MujocoBridgeNode {
   // The step's rows to the solver and back, with its ~step_report (mujoco_time < 0: MuJoCo's
   // solver did not run); true when drive mode applied our forces.
   bool exchange(const lcs::scene::MujocoProblem& mp, const ros::Time& stamp, double mujoco_time);
-  std::string receive(SolverLink::Outcome outcome, const lcs::scene::MujocoProblem& mp, Eigen::VectorXd* lambda);
+  std::string receive(SolverLink::Outcome outcome, const lcs::scene::MujocoProblem& mp,
+                      Eigen::VectorXd* lambda);
   bool useForces(const lcs::scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
                  bool mujoco_solves, diagnostic_msgs::DiagnosticStatus* report);
   void compare(const lcs::scene::MujocoProblem& mp, const Eigen::VectorXd& lambda, const ros::Time& stamp,
@@ -109,7 +111,8 @@ class MujocoBridgeNode {
   void forwardReference();
   void stepReference();
   // A ~step_report value (numbers with all their digits); the contact states' names.
-  static void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, const std::string& value);
+  static void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key,
+                       const std::string& value);
   static void addValue(diagnostic_msgs::DiagnosticStatus* status, const std::string& key, double value);
   static const char* const kStateNames[lcs::core::kContactStateCount];
 

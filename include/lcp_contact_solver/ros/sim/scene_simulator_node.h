@@ -40,12 +40,12 @@ namespace lcs = ::lcp_contact_solver;
 // The shared parameters (duration, rate_factor, force_timeout, wait_for_solver, linger,
 // frame_id (also tf parent and markers), publish_clock, status_period: solver_link.h) and:
 struct SimulatorSettings : LinkSettings {
-  std::string scene = "box_stack";  // <scene_dir>/<scene>.urdf + .yaml
-  std::string scene_dir;            // empty: <package>/config/scenes
-  double dt = 0.0;                  // s; 0 = the scene's dt
-  double marker_period = 0.04;      // simulated s between ~body_markers (while subscribed)
-  int min_subscribers = 1;          // subscribers `contacts` must have before the first step
-  bool print_status = false;        // status lines and the final summary on stdout (demo)
+  std::string scene = "box_stack";      // <scene_dir>/<scene>.urdf + .yaml
+  std::string scene_dir;                // empty: <package>/config/scenes
+  double dt = 0.0;                      // s; 0 = the scene's dt
+  double marker_period = 0.04;          // simulated s between ~body_markers (while subscribed)
+  int min_subscribers = 1;              // subscribers `contacts` must have before the first step
+  bool print_status = false;            // status lines and the final summary on stdout (demo)
   double rest_linear_velocity = 1e-3;   // m/s: slower bodies (and ...)
   double rest_angular_velocity = 1e-2;  // rad/s: ... slower spin) are "at rest" in the summary
 };
@@ -58,7 +58,7 @@ std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings*
 struct SimulatorCounters {
   std::int64_t steps = 0;
   std::int64_t steps_with_contacts = 0;
-  std::int64_t forces_applied = 0;   // steps integrated with the solver's forces
+  std::int64_t forces_applied = 0;  // steps integrated with the solver's forces
 };
 
 class SceneSimulatorNode {
@@ -116,9 +116,9 @@ class SceneSimulatorNode {
   // Solver stats gathered over the current status period.
   struct PeriodStats {
     int solves = 0;
-    double iterations = 0.0;     // sum
+    double iterations = 0.0;  // sum
     double max_residual = 0.0;
-    double solve_time = 0.0;     // sum, s
+    double solve_time = 0.0;  // sum, s
     std::int64_t misses_at_start = 0;
   } period_;
 };

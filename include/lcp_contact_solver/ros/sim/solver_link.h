@@ -26,15 +26,15 @@ namespace lcp_contact_solver_ros {
 
 // The private parameters every simulator beside the solver node reads.
 struct LinkSettings {
-  double duration = 0.0;         // simulated s to run; 0 = for ever
-  double rate_factor = 1.0;      // simulated s per wall s; 0 = as fast as possible
-  double force_timeout = 1.0;    // wall s to wait for the forces of a step; <= 0: for ever
-  double wait_for_solver = 30.0; // wall s to wait for the solver's connections; <= 0: for ever
-  double linger = 1.0;           // wall s to keep serving after the run, so the last
-                                 // messages reach slow subscribers before the node exits
+  double duration = 0.0;           // simulated s to run; 0 = for ever
+  double rate_factor = 1.0;        // simulated s per wall s; 0 = as fast as possible
+  double force_timeout = 1.0;      // wall s to wait for the forces of a step; <= 0: for ever
+  double wait_for_solver = 30.0;   // wall s to wait for the solver's connections; <= 0: for ever
+  double linger = 1.0;             // wall s to keep serving after the run, so the last
+                                   // messages reach slow subscribers before the node exits
   std::string frame_id = "world";  // frame of the contacts
-  bool publish_clock = true;     // publish /clock with the simulated time
-  double status_period = 1.0;    // simulated s between status lines
+  bool publish_clock = true;       // publish /clock with the simulated time
+  double status_period = 1.0;      // simulated s between status lines
 };
 
 // One private parameter and the setting it goes to; the setting's type says what the
