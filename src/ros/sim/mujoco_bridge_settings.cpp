@@ -35,25 +35,16 @@ std::string validate(const MujocoBridgeSettings& s) {
 }  // namespace
 
 std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSettings* s) {
-  return loadSettings(pnh, s,
-                      {{"model", &s->model},
-                       {"mode", &s->mode},
-                       {"cone", &s->cone},
-                       {"mujoco_solver", &s->mujoco_solver},
-                       {"mujoco_iterations", &s->mujoco_iterations},
-                       {"mujoco_tolerance", &s->mujoco_tolerance},
-                       {"compare", &s->compare},
-                       {"reference", &s->reference},
-                       {"steps", &s->steps},
-                       {"dt", &s->dt},
-                       {"min_report_subscribers", &s->min_report_subscribers},
-                       {"include_limits", &s->include_limits},
-                       {"include_equalities", &s->include_equalities},
-                       {"storage", &s->storage},
-                       {"dense_max_rows", &s->dense_max_rows},
-                       {"max_rel_warn", &s->max_rel_warn},
-                       {"print_summary", &s->print_summary}},
-                      [s] { return validate(*s); });
+  return loadSettings(
+      pnh, s,
+      {LCS_PARAM_FIELD(s, model), LCS_PARAM_FIELD(s, mode), LCS_PARAM_FIELD(s, cone),
+       LCS_PARAM_FIELD(s, mujoco_solver), LCS_PARAM_FIELD(s, mujoco_iterations),
+       LCS_PARAM_FIELD(s, mujoco_tolerance), LCS_PARAM_FIELD(s, compare), LCS_PARAM_FIELD(s, reference),
+       LCS_PARAM_FIELD(s, steps), LCS_PARAM_FIELD(s, dt), LCS_PARAM_FIELD(s, min_report_subscribers),
+       LCS_PARAM_FIELD(s, include_limits), LCS_PARAM_FIELD(s, include_equalities),
+       LCS_PARAM_FIELD(s, storage), LCS_PARAM_FIELD(s, dense_max_rows), LCS_PARAM_FIELD(s, max_rel_warn),
+       LCS_PARAM_FIELD(s, print_summary)},
+      [s] { return validate(*s); });
 }
 
 }  // namespace lcp_contact_solver_ros

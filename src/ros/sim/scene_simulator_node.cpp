@@ -70,14 +70,10 @@ scene::Scene loadScene(const SimulatorSettings& settings) {
 
 std::string loadSimulatorSettings(const ros::NodeHandle& pnh, SimulatorSettings* s) {
   return loadSettings(pnh, s,
-                      {{"scene", &s->scene},
-                       {"scene_dir", &s->scene_dir},
-                       {"dt", &s->dt},
-                       {"marker_period", &s->marker_period},
-                       {"min_subscribers", &s->min_subscribers},
-                       {"print_status", &s->print_status},
-                       {"rest_linear_velocity", &s->rest_linear_velocity},
-                       {"rest_angular_velocity", &s->rest_angular_velocity}},
+                      {LCS_PARAM_FIELD(s, scene), LCS_PARAM_FIELD(s, scene_dir), LCS_PARAM_FIELD(s, dt),
+                       LCS_PARAM_FIELD(s, marker_period), LCS_PARAM_FIELD(s, min_subscribers),
+                       LCS_PARAM_FIELD(s, print_status), LCS_PARAM_FIELD(s, rest_linear_velocity),
+                       LCS_PARAM_FIELD(s, rest_angular_velocity)},
                       [s] { return validate(*s); });
 }
 

@@ -43,14 +43,10 @@ std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamFi
 }
 
 std::string loadLinkSettings(const ros::NodeHandle& pnh, LinkSettings* s) {
-  const std::string error = readParams(pnh, {{"duration", &s->duration},
-                                             {"rate_factor", &s->rate_factor},
-                                             {"force_timeout", &s->force_timeout},
-                                             {"wait_for_solver", &s->wait_for_solver},
-                                             {"linger", &s->linger},
-                                             {"frame_id", &s->frame_id},
-                                             {"publish_clock", &s->publish_clock},
-                                             {"status_period", &s->status_period}});
+  const std::string error = readParams(
+      pnh, {LCS_PARAM_FIELD(s, duration), LCS_PARAM_FIELD(s, rate_factor), LCS_PARAM_FIELD(s, force_timeout),
+            LCS_PARAM_FIELD(s, wait_for_solver), LCS_PARAM_FIELD(s, linger), LCS_PARAM_FIELD(s, frame_id),
+            LCS_PARAM_FIELD(s, publish_clock), LCS_PARAM_FIELD(s, status_period)});
   return error.empty() ? validateLinkSettings(*s) : error;
 }
 

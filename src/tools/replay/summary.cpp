@@ -5,9 +5,37 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <ostream>
 #include <sstream>
+#include <string>
 
 namespace lcp_contact_solver_ros {
+namespace {
+
+// What a comparison's lines say: recorded forces (a change detector) or a reference.
+struct ComparisonWords {
+  std::string title;
+  std::string not_comparable;
+  std::string missing_reference;
+  std::string missing_replay;
+};
+
+void writeComparison(std::ostream& out, const Comparison& c, const ComparisonWords& words) {
+  out << words.title << ": " << c.compared << " cycles compared";
+  if (c.compared > 0) {
+    out << "; max |dlambda| " << shortNumber(c.max_abs) << " N, RMS " << shortNumber(c.rms())
+        << " N, max relative " << shortNumber(c.max_relative) << " (worst cycle #" << c.worst_cycle
+        << ", stamp " << stampDigits(c.worst_stamp) << ")";
+  }
+  out << "\n";
+  if (c.mismatched + c.missing_reference + c.missing_replay > 0) {
+    out << words.not_comparable << ": " << c.mismatched << " cycles with other contacts, "
+        << c.missing_reference << " " << words.missing_reference << ", " << c.missing_replay << " "
+        << words.missing_replay << "; first: " << c.first_mismatch << "\n";
+  }
+}
+
+}  // namespace
 
 std::string formatSummary(const ReplayResult& r) {
   std::ostringstream out;
@@ -24,37 +52,17 @@ std::string formatSummary(const ReplayResult& r) {
         << stampDigits(r.worst_residual_stamp) << "), mean " << shortNumber(r.meanResidual())
         << "; solve time " << shortNumber(r.total_solve_time) << " s\n";
   }
-  const Comparison& c = r.comparison;
   if (r.forces_topic.empty()) {
     if (r.reference_topic.empty()) out << "forces: no recorded forces in the bag, nothing compared\n";
   } else {
-    out << "forces vs recorded " << r.forces_topic << ": " << c.compared << " cycles compared";
-    if (c.compared > 0) {
-      out << "; max |dlambda| " << shortNumber(c.max_abs) << " N, RMS " << shortNumber(c.rms())
-          << " N, max relative " << shortNumber(c.max_relative) << " (worst cycle #" << c.worst_cycle
-          << ", stamp " << stampDigits(c.worst_stamp) << ")";
-    }
-    out << "\n";
-    if (c.mismatched + c.missing_reference + c.missing_replay > 0) {
-      out << "forces not comparable: " << c.mismatched << " cycles with other contacts, "
-          << c.missing_reference << " replayed without a recorded counterpart, " << c.missing_replay
-          << " recorded without a replayed counterpart; first: " << c.first_mismatch << "\n";
-    }
+    writeComparison(out, r.comparison,
+                    {"forces vs recorded " + r.forces_topic, "forces not comparable",
+                     "replayed without a recorded counterpart", "recorded without a replayed counterpart"});
   }
   if (!r.reference_topic.empty()) {
-    const Comparison& ref = r.reference;
-    out << "forces vs reference " << r.reference_topic << ": " << ref.compared << " cycles compared";
-    if (ref.compared > 0) {
-      out << "; max |dlambda| " << shortNumber(ref.max_abs) << " N, RMS " << shortNumber(ref.rms())
-          << " N, max relative " << shortNumber(ref.max_relative) << " (worst cycle #" << ref.worst_cycle
-          << ", stamp " << stampDigits(ref.worst_stamp) << ")";
-    }
-    out << "\n";
-    if (ref.mismatched + ref.missing_reference + ref.missing_replay > 0) {
-      out << "reference not comparable: " << ref.mismatched << " cycles with other contacts, "
-          << ref.missing_reference << " replayed without a reference, " << ref.missing_replay
-          << " references without a replayed cycle; first: " << ref.first_mismatch << "\n";
-    }
+    writeComparison(out, r.reference,
+                    {"forces vs reference " + r.reference_topic, "reference not comparable",
+                     "replayed without a reference", "references without a replayed cycle"});
   }
   const AnswerChecks& a = r.answers;
   if (a.checked > 0) {
@@ -69,6 +77,7 @@ std::string formatSummary(const ReplayResult& r) {
     out << "\n";
   }
   if (!r.stats_topic.empty()) {
+    const Comparison& c = r.comparison;
     out << "stats vs recorded " << r.stats_topic << ": " << c.stats_compared
         << " cycles; iterations differ in " << c.iteration_differences;
     if (c.iteration_differences > 0)

@@ -44,6 +44,10 @@ struct ParamField {
   std::variant<double*, int*, bool*, std::string*> setting;
 };
 
+// The field of a settings struct whose parameter has the member's own name.
+#define LCS_PARAM_FIELD(settings, member) \
+  ::lcp_contact_solver_ros::ParamField { #member, &(settings)->member }
+
 // Reads each parameter present over its setting's value (the default): empty string, or
 // "parameter <name> must be <what>" for the first of another type.
 std::string readParams(const ros::NodeHandle& pnh, std::initializer_list<ParamField> fields);
