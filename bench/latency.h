@@ -49,7 +49,9 @@ struct Case {
 
 // The messages of one cycle: serialize + deserialize time both ways, bytes, markers.
 struct MessageCosts {
-  double t_ser_in = 0.0, t_ser_out = 0.0;  // s
+  double t_ser_in = 0.0, t_ser_out = 0.0;  // s, serialize + deserialize
+  // The node's own share: deserializing what comes in, serializing what goes out (s).
+  double t_deser_in = 0.0, t_ser_out_only = 0.0;
   std::uint32_t bytes_in = 0, bytes_out = 0;
   double t_markers = 0.0;  // s
   std::uint32_t marker_bytes = 0;

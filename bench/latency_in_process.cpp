@@ -28,26 +28,34 @@ std::uint32_t wireBytes(const M& m) {
   return ros::serialization::serializationLength(m);
 }
 
-// Serialize + deserialize, seconds per round (median of enough rounds).
+// Serialize and deserialize, seconds per round: medians of each part and of both.
+struct SerializationTimes {
+  double both = 0.0, serialize = 0.0, deserialize = 0.0;
+};
+
 template <class M>
-double serializationTime(const M& m) {
+SerializationTimes serializationTimes(const M& m) {
   namespace ser = ros::serialization;
-  std::vector<double> t;
+  std::vector<double> both, out, in;
   double total = 0.0;
-  while (t.size() < 5 || total < 0.05) {
+  while (both.size() < 5 || total < 0.05) {
     const auto t0 = Clock::now();
     const std::uint32_t n = ser::serializationLength(m);
     std::vector<std::uint8_t> buf(n);
     ser::OStream os(buf.data(), n);
     ser::serialize(os, m);
+    const double t_out = secondsSince(t0);
+    const auto t1 = Clock::now();
     M back;
     ser::IStream is(buf.data(), n);
     ser::deserialize(is, back);
-    const double s = secondsSince(t0);
-    t.push_back(s);
-    total += s;
+    const double t_in = secondsSince(t1);
+    out.push_back(t_out);
+    in.push_back(t_in);
+    both.push_back(t_out + t_in);
+    total += t_out + t_in;
   }
-  return percentile(t, 0.5);
+  return {percentile(both, 0.5), percentile(out, 0.5), percentile(in, 0.5)};
 }
 
 template <class F>
@@ -75,8 +83,14 @@ double cycleTime(const lcs::core::SolverParams& params, Case& p, lros::CycleOutp
 MessageCosts messageCosts(const lros::NodeSettings& settings, const Case& p, const lros::CycleOutput& out) {
   const lcs::core::SolverParams& params = settings.solver;
   MessageCosts k;
-  k.t_ser_in = serializationTime(p.contacts) + serializationTime(p.compliance);
-  k.t_ser_out = serializationTime(out.forces) + serializationTime(out.stats);
+  const SerializationTimes contacts = serializationTimes(p.contacts);
+  const SerializationTimes compliance = serializationTimes(p.compliance);
+  const SerializationTimes forces = serializationTimes(out.forces);
+  const SerializationTimes stats = serializationTimes(out.stats);
+  k.t_ser_in = contacts.both + compliance.both;
+  k.t_ser_out = forces.both + stats.both;
+  k.t_deser_in = contacts.deserialize + compliance.deserialize;
+  k.t_ser_out_only = forces.serialize + stats.serialize;
   k.bytes_in = wireBytes(p.contacts) + wireBytes(p.compliance);
   k.bytes_out = wireBytes(out.forces) + wireBytes(out.stats);
   const std::vector<double> mu = lcs::core::effectiveMu(out.problem, params.mu);
