@@ -3,7 +3,7 @@
 //
 //   scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps 3]
 //                 [--pile-steps 30] [--dense-max-gb 2] [--budget 5] [--rounds 3] [--array-mb 512]
-//                 [--copies 4] [--threads 0] [--out FILE.csv]
+//                 [--copies 4] [--copies-max-contacts 10000] [--threads 0] [--out FILE.csv]
 //
 // Problems: bench/scene_problems.h (brick pyramids, box_stack's bodies, ~4 k² contacts for k
 // bricks at the base; sphere piles, sphere_pile's balls), taken after --pyramid-steps /
@@ -16,7 +16,7 @@
 //   scalar_rows   the same contacts frictionless, W's normal rows as 1×1 blocks: the
 //                 one-row problem the scalar-row sweep (core/kernels/scalar_rows.h) runs on
 //                 (pgs for the sweeps, auto to the tolerances)
-// With --copies K > 1 every problem is also taken K times side by side (box_pyramid_B16x4:
+// With --copies K > 1 every problem (up to --copies-max-contacts in all) is also taken K times side by side (box_pyramid_B16x4:
 // K independent islands, a block-diagonal W), its block_sparse and scalar_rows forms measured
 // with islands on (each island its own stopping test, --threads threads) and off.
 // Per form: bytes of the compliance, time per nlgs sweep (25 sweeps from a cold start, SOFA
@@ -65,8 +65,9 @@ struct Options {
   double budget = 5.0;
   int rounds = 3;
   int array_mb = 512;
-  int copies = 4;   // > 1: each problem also K times side by side (islands)
-  int threads = 0;  // island threads (0 = the core count)
+  int copies = 4;                   // > 1: each problem also K times side by side (islands)
+  int copies_max_contacts = 10000;  // ... when the copies have at most this many contacts
+  int threads = 0;                  // island threads (0 = the core count)
   std::string out = "bench/results/scaling.csv";
 };
 
@@ -75,7 +76,7 @@ int usage(int code) {
       code ? stderr : stdout,
       "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
       "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB]\n"
-      "                     [--copies K] [--threads N] [--out FILE.csv]\n");
+      "                     [--copies K] [--copies-max-contacts N] [--threads N] [--out FILE.csv]\n");
   return code;
 }
 
@@ -258,6 +259,8 @@ int main(int argc, char** argv) {
   // W of a copy are the same story as the original's).
   const std::size_t originals = problems.size();
   for (std::size_t i = 0; i < originals && o.copies > 1; ++i) {
+    if (problems[i].problem.contacts.size() * o.copies > static_cast<std::size_t>(o.copies_max_contacts))
+      continue;
     lcs_bench::SceneProblem copy;
     copy.name = problems[i].name + "x" + std::to_string(o.copies);
     copy.scene = problems[i].scene;
