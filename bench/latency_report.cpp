@@ -45,7 +45,7 @@ std::ofstream openLiveCsv(const std::string& path) {
       "node_iterations_median,inproc_solve_ms,inproc_iterations,inproc_cycle_ms,msg_in_bytes,msg_out_bytes,"
       "serialize_in_ms,serialize_out_ms,markers_build_ms,marker_bytes,node_cpu_percent,load1,"
       "node_internal_overhead_median_ms,node_internal_overhead_p90_ms,sent,skipped,node_cpu_ms_per_answer,"
-      "deserialize_in_ms,serialize_out_only_ms,msg_in_to_forces_out_minus_solve_ms\n");
+      "deserialize_in_ms,serialize_out_only_ms\n");
 }
 
 void printLiveHeader(const Options& o, const lcs::core::SolverParams& params, bool warm) {
@@ -56,23 +56,15 @@ void printLiveHeader(const Options& o, const lcs::core::SolverParams& params, bo
   std::printf(
       "| problem | contacts | phase | received | rate (Hz) | latency median / p90 / p99 (ms) | node "
       "solve_time "
-      "(ms) | latency − solve_time (ms) | in the node: latency − solve_time (ms) | message in → forces out "
-      "− solve (ms) | in-process solve / cycle "
+      "(ms) | latency − solve_time (ms) | in the node, message in → forces out: latency − solve_time (ms) | "
+      "in-process solve / cycle "
       "(ms) | "
       "node CPU | node CPU per answer (ms) |\n"
-      "|---|---:|---|---:|---:|---|---:|---:|---:|---:|---|---:|---:|\n");
+      "|---|---:|---|---:|---:|---|---:|---:|---:|---|---:|---:|\n");
   std::fflush(stdout);
 }
 
 namespace {
-
-// Message in to forces out, minus the solve, on the node's side alone: deserializing the pair
-// (in-process, same messages) + the node's own work from the pair received to the forces
-// published (live median: SolverStats.latency − solve_time) + serializing the forces and stats.
-double nodeSideOverhead(const PhaseContext& ctx) {
-  return ctx.refs.costs.t_deser_in + percentile(ctx.tracker.node_overhead, 0.5) +
-         ctx.refs.costs.t_ser_out_only;
-}
 
 void writePhaseCsv(const PhaseContext& ctx, const std::string& name, int inflight, const PhaseCounts& c) {
   const Options& o = ctx.o;
@@ -96,7 +88,7 @@ void writePhaseCsv(const PhaseContext& ctx, const std::string& name, int infligh
           << 1e3 * percentile(tracker.node_overhead, 0.5) << ','
           << 1e3 * percentile(tracker.node_overhead, 0.9) << ',' << c.sent << ',' << c.skipped << ','
           << 1e3 * (c.cpu1 - c.cpu0) / std::max<long>(tracker.completed, 1) << ',' << 1e3 * r.costs.t_deser_in
-          << ',' << 1e3 * r.costs.t_ser_out_only << ',' << 1e3 * nodeSideOverhead(ctx) << '\n';
+          << ',' << 1e3 * r.costs.t_ser_out_only << '\n';
   ctx.csv.flush();
 }
 
@@ -107,14 +99,13 @@ void printPhaseRow(const PhaseContext& ctx, const std::string& name, const Phase
   const double cpu = 100.0 * (c.cpu1 - c.cpu0) / c.wall;
   const auto& lf = tracker.lat_forces;
   std::printf(
-      "| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% "
-      "| %.3f "
+      "| %s | %zu | %s | %ld | %.0f | %.3f / %.3f / %.3f | %.3f | %.3f | %.3f | %.3f / %.3f | %.0f %% | %.3f "
       "|\n",
       p.name.c_str(), p.problem.contacts.size(), name.c_str(), tracker.completed, rate,
       1e3 * percentile(lf, 0.5), 1e3 * percentile(lf, 0.9), 1e3 * percentile(lf, 0.99),
       1e3 * percentile(tracker.solve_time, 0.5), 1e3 * percentile(tracker.overhead, 0.5),
-      1e3 * percentile(tracker.node_overhead, 0.5), 1e3 * nodeSideOverhead(ctx), 1e3 * ctx.refs.t_solve,
-      1e3 * ctx.refs.t_cycle, cpu, 1e3 * (c.cpu1 - c.cpu0) / std::max<long>(tracker.completed, 1));
+      1e3 * percentile(tracker.node_overhead, 0.5), 1e3 * ctx.refs.t_solve, 1e3 * ctx.refs.t_cycle, cpu,
+      1e3 * (c.cpu1 - c.cpu0) / std::max<long>(tracker.completed, 1));
 }
 
 }  // namespace

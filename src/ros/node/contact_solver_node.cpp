@@ -34,6 +34,17 @@ ros::Time wallNow() {
   return ros::Time(now.sec, now.nsec);
 }
 
+// When roscpp had the whole message, on the node's wall clock: its receipt time (taken by the
+// network thread, before the message waited for the input thread and was deserialized there)
+// is ROS time, so it is placed on the wall clock only under wall time; with /use_sim_time the
+// callback's own time stands. So a pair's latency counts from its bytes' arrival.
+ros::Time arrivalOf(const ros::Time& receipt) {
+  const ros::Time wall = wallNow();
+  if (ros::Time::isSimTime() || receipt.isZero()) return wall;
+  const double waited = (ros::Time::now() - receipt).toSec();
+  return waited > 0.0 && waited < 1.0 ? wall - ros::Duration(waited) : wall;
+}
+
 // For warnings throttled in wall time: rosconsole's *_THROTTLE count ROS time, and with
 // /use_sim_time a simulator whose runs last under the period (or whose clock restarts or
 // stops) never gets them (found by the simulator-restart rostest). True at most once per
@@ -92,14 +103,21 @@ void ContactSolverNode::setUpTopics() {
   // TCP_NODELAY: without it the sender's kernel batches small messages (Nagle), and at
   // rates of ~1 kHz bursts overflow the queues (bench/soak.sh: a third of the pairs lost).
   constexpr int kReceiveQueue = 10000;  // ~10 s at 1 kHz before roscpp could drop one
-  ros::SubscribeOptions contacts = ros::SubscribeOptions::create<ContactArray>(
-      "contacts", kReceiveQueue, [this](const ContactArray::ConstPtr& m) { onContacts(m); }, ros::VoidPtr(),
-      &input_callbacks_);
+  // Message events: their receipt time is when the bytes arrived (arrivalOf).
+  using ContactsEvent = const ros::MessageEvent<ContactArray const>&;
+  using ComplianceEvent = const ros::MessageEvent<Compliance const>&;
+  ros::SubscribeOptions contacts;
+  contacts.initByFullCallbackType<ContactsEvent>("contacts", kReceiveQueue, [this](ContactsEvent e) {
+    onContacts(e.getConstMessage(), arrivalOf(e.getReceiptTime()));
+  });
+  contacts.callback_queue = &input_callbacks_;
   contacts.transport_hints = ros::TransportHints().tcpNoDelay();
   contacts_sub_ = nh_.subscribe(contacts);
-  ros::SubscribeOptions compliance = ros::SubscribeOptions::create<Compliance>(
-      "compliance", kReceiveQueue, [this](const Compliance::ConstPtr& m) { onCompliance(m); }, ros::VoidPtr(),
-      &input_callbacks_);
+  ros::SubscribeOptions compliance;
+  compliance.initByFullCallbackType<ComplianceEvent>("compliance", kReceiveQueue, [this](ComplianceEvent e) {
+    onCompliance(e.getConstMessage(), arrivalOf(e.getReceiptTime()));
+  });
+  compliance.callback_queue = &input_callbacks_;
   compliance.transport_hints = ros::TransportHints().tcpNoDelay();
   compliance_sub_ = nh_.subscribe(compliance);
   input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_callbacks_);
@@ -128,13 +146,13 @@ void ContactSolverNode::setUpDiagnostics() {
 
 // ---- callbacks ------------------------------------------------------------------------
 
-void ContactSolverNode::onContacts(const ContactArray::ConstPtr& contacts) {
+void ContactSolverNode::onContacts(const ContactArray::ConstPtr& contacts, const ros::Time& arrival) {
   solve_rate_->contactsReceived();
-  inputs_.addContacts(contacts, wallNow());
+  inputs_.addContacts(contacts, arrival);
 }
 
-void ContactSolverNode::onCompliance(const Compliance::ConstPtr& compliance) {
-  inputs_.addCompliance(compliance, wallNow());
+void ContactSolverNode::onCompliance(const Compliance::ConstPtr& compliance, const ros::Time& arrival) {
+  inputs_.addCompliance(compliance, arrival);
 }
 
 void ContactSolverNode::solverLoop() {

@@ -62,8 +62,9 @@ class ContactSolverNode {
   void setUpReconfigure();
   void setUpDiagnostics();
 
-  void onContacts(const ContactArray::ConstPtr& contacts);
-  void onCompliance(const Compliance::ConstPtr& compliance);
+  // `arrival`: wall time when roscpp had the message (arrivalOf), for pairing and latency.
+  void onContacts(const ContactArray::ConstPtr& contacts, const ros::Time& arrival);
+  void onCompliance(const Compliance::ConstPtr& compliance, const ros::Time& arrival);
   // The solver thread: takes complete pairs from inputs_ and solves them one at a time.
   void solverLoop();
   void onPair(const InputPair& pair);
