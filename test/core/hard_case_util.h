@@ -1,4 +1,4 @@
-// Generators and checks of the hard-case suite (test_hard_cases.cpp): small rigid-body
+// Generators and checks of the hard-case suite (test_hard_cases*.cpp): small rigid-body
 // worlds turned into contact problems (W = dt² J M⁻¹ Jᵀ, d_free = gap + dt J v_free, the
 // scene layer's convention, written again here so the core tests need no scene library),
 // and the checks every hard case applies to every solver's result.
@@ -350,6 +350,25 @@ inline SolveResult solveTwiceChecked(const Problem& p, const SolverParams& param
   const std::string line = expectHonest(p, params, r, label);
   if (print) std::printf("  %s\n", line.c_str());
   return r;
+}
+
+// A box (0.2 m cube, 1 kg unless given) resting on the static ground with k contacts.
+inline World boxOnPlane(int k, double mu, double mass = 1.0, double side = 0.2) {
+  World world;
+  const Eigen::Vector3d size(side, side, side);
+  const Eigen::Vector3d com(0.0, 0.0, 0.5 * side);
+  world.add(box(mass, size, com));
+  for (const Eigen::Vector3d& p : bottomPoints(com, size, k))
+    world.contact(0, -1, p, Eigen::Vector3d::UnitZ(), mu);
+  return world;
+}
+
+// Solvers that apply to a problem: pgs and lemke need μ = 0 (disc model) everywhere.
+inline bool applies(SolverKind kind, const Problem& p, double default_mu = 0.6) {
+  if (kind != SolverKind::kPgs && kind != SolverKind::kLemke) return true;
+  for (const Contact& c : p.contacts)
+    if (c.type == ContactType::kFrictional && (c.mu < 0.0 ? default_mu : c.mu) > 0.0) return false;
+  return true;
 }
 
 }  // namespace hard
