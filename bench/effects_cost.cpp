@@ -43,6 +43,7 @@
 #include "scene_problems.h"
 
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <exception>
@@ -70,42 +71,35 @@ struct Options {
   std::string out = "bench/results/effects_cost.csv";
 };
 
-int usage(int code) {
-  std::fprintf(
-      code ? stderr : stdout,
-      "usage: effects_cost [--bases 5,9,16] [--balls 40,120,350] [--steps 30] [--gen-balls 100,400]\n"
-      "                    [--budget S] [--rounds N] [--torsional M] [--rolling M] [--out FILE.csv]\n");
-  return code;
-}
-
-// Fills o from the command line; -1 to go on, else the exit code (after the usage text).
+// Fills o from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
 int parseOptions(int argc, char** argv, Options* options) {
   Options& o = *options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") return usage(0);
-    if (i + 1 >= argc) return usage(2);
-    const std::string v = argv[++i];
-    if (a == "--bases")
-      o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls")
-      o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--gen-balls")
-      o.gen_balls = lcs_bench::parseIntList(v);
-    else if (a == "--steps")
-      o.steps = std::stoi(v);
-    else if (a == "--budget")
-      o.budget = std::stod(v);
-    else if (a == "--rounds")
-      o.rounds = std::stoi(v);
-    else if (a == "--torsional")
-      o.torsional = std::stod(v);
-    else if (a == "--rolling")
-      o.rolling = std::stod(v);
-    else if (a == "--out")
-      o.out = v;
-    else
-      return usage(2);
+  CLI::App app{"effects_cost: what each contact effect costs (in-process, CSV)"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  std::string bases, balls, gen_balls;  // comma lists
+  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")->default_str("5,9,16");
+  app.add_option("--balls", balls, "sphere piles: balls, comma list")->default_str("40,120,350");
+  app.add_option("--steps", o.steps, "in-process steps before a pile problem is taken")
+      ->capture_default_str();
+  app.add_option("--gen-balls", gen_balls, "contact generation: balls in the bin, comma list")
+      ->default_str("100,400");
+  app.add_option("--budget", o.budget, "wall-clock budget of a solve to a tolerance (s)")
+      ->capture_default_str();
+  app.add_option("--rounds", o.rounds, "interleaved rounds; the fastest counts")->capture_default_str();
+  app.add_option("--torsional", o.torsional, "torsional friction of the 6-row contacts")
+      ->capture_default_str();
+  app.add_option("--rolling", o.rolling, "rolling friction of the 6-row contacts")->capture_default_str();
+  app.add_option("--out", o.out, "the CSV to write")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
+    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
+    if (app.count("--gen-balls")) o.gen_balls = lcs_bench::parseIntList(gen_balls);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const std::exception& e) {  // a bad number in a comma list
+    std::fprintf(stderr, "effects_cost: bad list value (%s)\n", e.what());
+    return 2;
   }
   return -1;
 }
