@@ -40,6 +40,7 @@
 #include "lcp_contact_solver/core/islands.h"
 
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <array>
 #include <cmath>
@@ -71,15 +72,6 @@ struct Options {
   int threads = 1;
   std::string out = "bench/results/scaling.csv";
 };
-
-int usage(int code) {
-  std::fprintf(
-      code ? stderr : stdout,
-      "usage: scaling_bench [--bases 2,5,16,28,50] [--balls 4,40,350,1000,2000] [--pyramid-steps N]\n"
-      "                     [--pile-steps N] [--dense-max-gb G] [--budget S] [--rounds N] [--array-mb MB]\n"
-      "                     [--copies K] [--copies-max-contacts N] [--threads N] [--out FILE.csv]\n");
-  return code;
-}
 
 // Single-thread read bandwidth (bytes/s): sum of `mb` MB of doubles, 8 independent
 // accumulators (so the adds do not serialize), fastest of `passes` in thread CPU time.
@@ -189,40 +181,49 @@ lcs::core::Problem disjointCopies(const lcs::core::Problem& p, int k) {
   return out;
 }
 
+// Fills o from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
+int parseOptions(int argc, char** argv, Options* options) {
+  Options& o = *options;
+  CLI::App app{"scaling_bench: scaling from ~10 to ~10,000 contacts (in-process, CSV)"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  std::string bases, balls;  // comma lists
+  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")
+      ->default_str("2,5,16,28,50");
+  app.add_option("--balls", balls, "sphere piles: balls, comma list")->default_str("4,40,350,1000,2000");
+  app.add_option("--pyramid-steps", o.pyramid_steps, "in-process steps before a pyramid problem is taken")
+      ->capture_default_str();
+  app.add_option("--pile-steps", o.pile_steps, "in-process steps before a pile problem is taken")
+      ->capture_default_str();
+  app.add_option("--dense-max-gb", o.dense_max_gb, "dense W skipped above this size (GB)")
+      ->capture_default_str();
+  app.add_option("--budget", o.budget, "wall-clock budget of a solve to a tolerance (s)")
+      ->capture_default_str();
+  app.add_option("--rounds", o.rounds, "interleaved rounds; the fastest counts")->capture_default_str();
+  app.add_option("--array-mb", o.array_mb, "array summed to measure the read bandwidth (MB)")
+      ->capture_default_str();
+  app.add_option("--copies", o.copies, "K > 1: each problem also K times side by side (islands)")
+      ->capture_default_str();
+  app.add_option("--threads", o.threads, "island threads (1: all in the measured thread)")
+      ->capture_default_str();
+  app.add_option("--out", o.out, "the CSV to write")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
+    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const std::exception& e) {  // a bad number in a comma list
+    std::fprintf(stderr, "scaling: bad list value (%s)\n", e.what());
+    return 2;
+  }
+  return -1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") return usage(0);
-    if (i + 1 >= argc) return usage(2);
-    const std::string v = argv[++i];
-    if (a == "--bases")
-      o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls")
-      o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--pyramid-steps")
-      o.pyramid_steps = std::stoi(v);
-    else if (a == "--pile-steps")
-      o.pile_steps = std::stoi(v);
-    else if (a == "--dense-max-gb")
-      o.dense_max_gb = std::stod(v);
-    else if (a == "--budget")
-      o.budget = std::stod(v);
-    else if (a == "--rounds")
-      o.rounds = std::stoi(v);
-    else if (a == "--array-mb")
-      o.array_mb = std::stoi(v);
-    else if (a == "--copies")
-      o.copies = std::stoi(v);
-    else if (a == "--threads")
-      o.threads = std::stoi(v);
-    else if (a == "--out")
-      o.out = v;
-    else
-      return usage(2);
-  }
+  if (const int code = parseOptions(argc, argv, &o); code >= 0) return code;
   std::ofstream csv(o.out);
   if (!csv) {
     std::fprintf(stderr, "scaling: cannot write %s\n", o.out.c_str());
