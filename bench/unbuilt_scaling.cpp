@@ -16,6 +16,8 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -88,32 +90,26 @@ int main(int argc, char** argv) {
   std::vector<int> balls = {100, 300, 1000};
   int steps = 30, sweeps = 100, dense_max_rows = 6000;
   std::string out_path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << "unbuilt_scaling: " << a << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--bases")
-      bases = parseList(next());
-    else if (a == "--balls")
-      balls = parseList(next());
-    else if (a == "--steps")
-      steps = std::stoi(next());
-    else if (a == "--sweeps")
-      sweeps = std::stoi(next());
-    else if (a == "--dense-max-rows")
-      dense_max_rows = std::stoi(next());
-    else if (a == "--out")
-      out_path = next();
-    else {
-      std::cerr << "usage: unbuilt_scaling [--bases 4,8] [--balls 100,300] [--steps N] [--sweeps N] "
-                   "[--dense-max-rows R] [--out FILE]\n";
-      return a == "--help" ? 0 : 2;
-    }
+  CLI::App app{"unbuilt_scaling: the unbuilt solve against the built ones (storage, setup, sweep; CSV)"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  std::string bases_list, balls_list;  // comma lists
+  app.add_option("--bases", bases_list, "brick pyramids: bricks at the base, comma list")
+      ->default_str("4,8,12,16");
+  app.add_option("--balls", balls_list, "sphere piles: balls, comma list")->default_str("100,300,1000");
+  app.add_option("--steps", steps, "in-process steps before a problem is taken")->capture_default_str();
+  app.add_option("--sweeps", sweeps, "sweeps timed per run")->capture_default_str();
+  app.add_option("--dense-max-rows", dense_max_rows, "dense W skipped above this many rows")
+      ->capture_default_str();
+  app.add_option("--out", out_path, "the CSV to write (default: stdout)");
+  try {
+    app.parse(argc, argv);
+    if (app.count("--bases")) bases = parseList(bases_list);
+    if (app.count("--balls")) balls = parseList(balls_list);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const std::exception& e) {  // a bad number in a comma list
+    std::cerr << "unbuilt_scaling: bad list value (" << e.what() << ")\n";
+    return 2;
   }
   std::ofstream file;
   if (!out_path.empty()) file.open(out_path);
