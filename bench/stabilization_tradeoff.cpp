@@ -8,6 +8,8 @@
 #include "lcp_contact_solver/scene/scene.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -29,24 +31,20 @@ struct Options {
   std::string out = "stabilization.csv";
 };
 
+// The command line (CLI11); exits after --help (0) or a bad option (2).
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--scene")
-      o.scene = value;
-    else if (key == "--scenes-dir")
-      o.scenes_dir = value;
-    else if (key == "--steps")
-      o.steps = std::atoi(value.c_str());
-    else if (key == "--tolerance")
-      o.tolerance = std::atof(value.c_str());
-    else if (key == "--out")
-      o.out = value;
-    else {
-      std::cerr << "unknown option " << key << "\n";
-      std::exit(2);
-    }
+  CLI::App app{"stabilization_tradeoff: what softness and erp cost and buy (in-process, CSV)"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  app.add_option("--scene", o.scene, "the shipped scene stepped")->capture_default_str();
+  app.add_option("--scenes-dir", o.scenes_dir, "where the scenes are")->capture_default_str();
+  app.add_option("--steps", o.steps, "steps per (erp, softness) pair")->capture_default_str();
+  app.add_option("--tolerance", o.tolerance, "nlgs tolerance")->capture_default_str();
+  app.add_option("--out", o.out, "the CSV to write")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::exit(app.exit(e) == 0 ? 0 : 2);
   }
   return o;
 }
