@@ -32,6 +32,8 @@
 #include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "lcp_contact_solver/scene/mujoco_comparison.h"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -284,65 +286,56 @@ void benchModel(const std::string& path, const Options& o, std::vector<Row>* row
   }
 }
 
+// Fills o from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
+int parseOptions(int argc, char** argv, Options* options) {
+  Options& o = *options;
+  CLI::App app{
+      "mujoco_bench: per-step solve time of ours against MuJoCo's PGS, CG and Newton at matched residual"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  std::string ours, mujoco, storage = "auto", islands = "on";
+  app.add_option("--model", o.models, "a MuJoCo model (repeatable; default 22_humanoids and humanoid100)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--first", o.first, "first measured step")->capture_default_str();
+  app.add_option("--count", o.count, "steps measured")->capture_default_str();
+  app.add_option("--target", o.target, "target residual (the package's measure)")->capture_default_str();
+  app.add_option("--repeat", o.repeat, "runs per measurement, the minimum counts")->capture_default_str();
+  app.add_option("--ours", ours, "our solvers (comma list)")->default_str("pgs,newton,apgd,lemke");
+  app.add_option("--mujoco", mujoco, "MuJoCo's solvers (comma list), or none")->default_str("pgs,cg,newton");
+  app.add_option("--storage", storage, "W's storage for ours")
+      ->check(CLI::IsMember({"auto", "dense", "block_sparse"}))
+      ->capture_default_str();
+  app.add_option("--lemke-max-rows", o.lemke_max_rows, "lemke not run above this many rows")
+      ->capture_default_str();
+  app.add_option("--csv", o.csv, "the CSV to write (default: none)");
+  app.add_option("--threads", o.threads, "threads of ours (0 = the core count)")->capture_default_str();
+  app.add_option("--islands", islands, "on|off: islands of ours (anything but off is on)")
+      ->capture_default_str();
+  app.add_option("--mujoco-tolerance", o.mujoco_tolerance,
+                 "T > 0: MuJoCo's solvers also at their own stopping rule")
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  o.repeat = std::max(1, o.repeat);
+  o.threads = std::max(0, o.threads);
+  if (app.count("--ours")) o.ours = split(ours);
+  if (app.count("--mujoco")) o.mujoco = mujoco == "none" ? std::vector<std::string>() : split(mujoco);
+  if (storage == "dense")
+    o.storage = MujocoExtractOptions::Storage::kDense;
+  else if (storage == "block_sparse")
+    o.storage = MujocoExtractOptions::Storage::kBlockSparse;
+  if (app.count("--islands")) o.islands = islands != "off";
+  return -1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << "mujoco_bench: " << a << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--model")
-      o.models.push_back(value());
-    else if (a == "--first")
-      o.first = std::atoi(value().c_str());
-    else if (a == "--count")
-      o.count = std::atoi(value().c_str());
-    else if (a == "--target")
-      o.target = std::atof(value().c_str());
-    else if (a == "--repeat")
-      o.repeat = std::max(1, std::atoi(value().c_str()));
-    else if (a == "--ours")
-      o.ours = split(value());
-    else if (a == "--lemke-max-rows")
-      o.lemke_max_rows = std::atoi(value().c_str());
-    else if (a == "--mujoco") {
-      const std::string v = value();
-      o.mujoco = v == "none" ? std::vector<std::string>() : split(v);
-    } else if (a == "--storage") {
-      const std::string v = value();
-      if (v == "dense")
-        o.storage = MujocoExtractOptions::Storage::kDense;
-      else if (v == "block_sparse")
-        o.storage = MujocoExtractOptions::Storage::kBlockSparse;
-      else if (v == "auto")
-        o.storage = MujocoExtractOptions::Storage::kAuto;
-      else {
-        std::cerr << "mujoco_bench: --storage takes auto, dense or block_sparse\n";
-        return 2;
-      }
-    } else if (a == "--csv")
-      o.csv = value();
-    else if (a == "--threads")
-      o.threads = std::max(0, std::atoi(value().c_str()));
-    else if (a == "--islands")
-      o.islands = value() != "off";
-    else if (a == "--mujoco-tolerance")
-      o.mujoco_tolerance = std::atof(value().c_str());
-    else {
-      std::cerr
-          << "usage: mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]\n"
-             "                    [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]\n"
-             "                    [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]\n"
-             "                    [--threads N] [--islands on|off] [--mujoco-tolerance T]\n";
-      return a == "--help" || a == "-h" ? 0 : 2;
-    }
-  }
+  if (const int code = parseOptions(argc, argv, &o); code >= 0) return code;
   if (o.models.empty())
     o.models = {"/usr/share/mujoco/model/humanoid/22_humanoids.xml",
                 "/usr/share/mujoco/model/humanoid100/humanoid100.xml"};
