@@ -16,6 +16,8 @@
 #include "work_precision.h"
 #include "auto_regret_table.h"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <fstream>
@@ -41,59 +43,58 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-int usage(const char* msg) {
-  std::cerr << "work_precision: " << msg << "\n"
-            << "usage: work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]\n"
-               "       [--families fc3d,lcp,scenes] [--filter SUBSTRING] [--solvers a,b]\n"
-               "       [--tolerances 1e-2,1e-4,...] [--quick] [--regret FILE]\n";
-  return 2;
-}
-
-// Fills opt from the command line; -1 to go on, else the exit code (after the usage text).
+// Fills opt from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
 int parseOptions(int argc, char** argv, wp::Options* options) {
   wp::Options& opt = *options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-      return argv[++i];
-    };
-    try {
-      if (a == "--problems")
-        opt.problems_dir = value();
-      else if (a == "--scenes")
-        opt.scenes_dir = value();
-      else if (a == "--out")
-        opt.out = value();
-      else if (a == "--regret")
-        opt.regret = value();
-      else if (a == "--budget")
-        opt.budget = std::stod(value());
-      else if (a == "--filter")
-        opt.filter = value();
-      else if (a == "--tolerances") {
+  CLI::App app{"work_precision: work-precision benchmark (every solver and peer over a tolerance sweep)"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  double budget = opt.budget;
+  std::string families, solvers, tolerances;  // comma lists
+  app.add_option("--problems", opt.problems_dir, "the problem files (Siconos .dat, FCLIB .hdf5)")
+      ->capture_default_str();
+  app.add_option("--scenes", opt.scenes_dir, "the scenes directory")->capture_default_str();
+  app.add_option("--out", opt.out, "the CSV to write")->capture_default_str();
+  CLI::Option* budget_opt = app.add_option("--budget", budget, "wall-clock budget per solve (s)");
+  budget_opt->capture_default_str();
+  app.add_option("--families", families, "fc3d,lcp,scenes (comma list)")->default_str("fc3d,lcp,scenes");
+  app.add_option("--filter", opt.filter, "only problems whose name holds SUBSTRING");
+  app.add_option("--solvers", solvers, "only these solvers and peers (comma list; default all)");
+  CLI::Option* tolerances_opt = app.add_option("--tolerances", tolerances, "the tolerance sweep (comma list)")
+                                    ->default_str("1e-2,1e-3,...,1e-10");
+  CLI::Option* quick =
+      app.add_flag("--quick", "a short run: 4 tolerances, small scenes, budget <= 1 s, 1 repeat");
+  app.add_option("--regret", opt.regret, "the auto regret table to write (markdown)")->capture_default_str();
+  try {
+    app.parse(argc, argv);
+    if (app.count("--families")) {
+      const auto v = split(families);
+      opt.families = {v.begin(), v.end()};
+    }
+    if (app.count("--solvers")) {
+      const auto v = split(solvers);
+      opt.solvers = {v.begin(), v.end()};
+    }
+    // --quick sets the tolerances and caps the budget: in command-line order, the later wins.
+    for (const CLI::Option* given : app.parse_order()) {
+      if (given == budget_opt) {
+        opt.budget = budget;
+      } else if (given == tolerances_opt) {
         opt.tolerances.clear();
-        for (const std::string& t : split(value())) opt.tolerances.push_back(std::stod(t));
-      } else if (a == "--families") {
-        const auto v = split(value());
-        opt.families = {v.begin(), v.end()};
-      } else if (a == "--solvers") {
-        const auto v = split(value());
-        opt.solvers = {v.begin(), v.end()};
-      } else if (a == "--quick") {
+        for (const std::string& t : split(tolerances)) opt.tolerances.push_back(std::stod(t));
+      } else if (given == quick) {
         opt.tolerances = {1e-2, 1e-4, 1e-6, 1e-8};
         opt.pyramid_bases = {2, 5};
         opt.pile_balls = {12};
         opt.budget = std::min(opt.budget, 1.0);
         opt.min_repeats = 1;
         opt.min_time = 0.0;
-      } else if (a == "--help" || a == "-h")
-        return usage("work-precision benchmark"), 0;
-      else
-        return usage(("unknown argument " + a).c_str());
-    } catch (const std::exception& e) {
-      return usage(e.what());
+      }
     }
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const std::exception& e) {  // a bad number in --tolerances
+    std::cerr << "work_precision: bad --tolerances value (" << e.what() << ")\n";
+    return 2;
   }
   return -1;
 }
