@@ -21,6 +21,7 @@
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -86,31 +87,24 @@ double percentile(std::vector<double>* values, double q) {
   return (*values)[k];
 }
 
-int usage() {
-  std::fprintf(stderr, "usage: soak_feeder BAG [--rate HZ] [--duration S] [--stats TOPIC]\n");
-  return 2;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "soak_feeder", ros::init_options::AnonymousName);
   std::string bag, stats_topic = "contact_solver/stats";
   double rate = 1000.0, duration = 300.0;
-  for (int i = 1; i < argc; ++i) {  // ros::init has removed the remappings
-    const std::string a = argv[i];
-    if (a == "--rate" && i + 1 < argc)
-      rate = std::atof(argv[++i]);
-    else if (a == "--duration" && i + 1 < argc)
-      duration = std::atof(argv[++i]);
-    else if (a == "--stats" && i + 1 < argc)
-      stats_topic = argv[++i];
-    else if (!a.empty() && a[0] != '-')
-      bag = a;
-    else
-      return usage();
+  CLI::App app{"soak_feeder: replays a bag's ContactArray/Compliance pairs to a live contact_solver"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  app.add_option("bag", bag, "the bag of ContactArray/Compliance pairs")->required();
+  app.add_option("--rate", rate, "pairs per second (wall clock)")->capture_default_str();
+  app.add_option("--duration", duration, "how long to feed (s)")->capture_default_str();
+  app.add_option("--stats", stats_topic, "the node's SolverStats topic")->capture_default_str();
+  try {
+    app.parse(argc, argv);  // ros::init has removed the remappings
+    if (!(rate > 0.0) || !(duration > 0.0)) throw CLI::ValidationError("--rate and --duration must be > 0");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  if (bag.empty() || !(rate > 0.0) || !(duration > 0.0)) return usage();
 
   std::vector<Pair> pairs;
   try {
