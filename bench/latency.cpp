@@ -38,6 +38,7 @@
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <fstream>
@@ -48,69 +49,49 @@
 namespace lcs_bench::latency {
 namespace {
 
-int usage(int code) {
-  std::fprintf(code ? stderr : stdout,
-               "usage: latency_bench [--bases 5,16] [--balls N,...] [--steps N] [--count N] [--warmup N] "
-               "[--rate-seconds S]\n"
-               "               [--latency-seconds S]\n"
-               "               [--inflight 1,4] [--pace HZ,...] [--pace-seconds S]\n"
-               "               [--label NAME] [--solver-pid PID] [--in-process-nodelet]\n"
-               "               [--markers 0|1] [--out FILE.csv]\n"
-               "       latency_bench --sink TOPIC [--duration S]\n"
-               "       latency_bench --reference-only [--bases 5,16] [--out FILE.csv]\n");
-  return code;
-}
-
-// Fills o from the command line; -1 to go on, else the exit code (after the usage text).
+// Fills o from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
 int parseOptions(int argc, char** argv, Options* options) {
   Options& o = *options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") return usage(0);
-    if (a == "--in-process-nodelet") {
-      o.in_process_nodelet = true;
-      continue;
-    }
-    if (a == "--reference-only") {
-      o.reference_only = true;
-      continue;
-    }
-    if (i + 1 >= argc) return usage(2);
-    const std::string v = argv[++i];
-    if (a == "--bases")
-      o.bases = lcs_bench::parseIntList(v);
-    else if (a == "--balls")
-      o.balls = lcs_bench::parseIntList(v);
-    else if (a == "--steps")
-      o.steps = std::stoi(v);
-    else if (a == "--count")
-      o.count = std::stoi(v);
-    else if (a == "--warmup")
-      o.warmup = std::stoi(v);
-    else if (a == "--rate-seconds")
-      o.rate_seconds = std::stod(v);
-    else if (a == "--latency-seconds")
-      o.latency_seconds = std::stod(v);
-    else if (a == "--inflight")
-      o.inflight = lcs_bench::parseIntList(v);
-    else if (a == "--pace")
-      o.paces = lcs_bench::parseIntList(v);
-    else if (a == "--pace-seconds")
-      o.pace_seconds = std::stod(v);
-    else if (a == "--label")
-      o.label = v;
-    else if (a == "--solver-pid")
-      o.solver_pid = std::stoi(v);
-    else if (a == "--markers")
-      o.markers = std::stoi(v);
-    else if (a == "--out")
-      o.out = v;
-    else if (a == "--sink")
-      o.sink = v;
-    else if (a == "--duration")
-      o.duration = std::stod(v);
-    else
-      return usage(2);
+  CLI::App app{
+      "latency_bench: end-to-end latency and sustained rate of the live solver (CSV)\n"
+      "  latency_bench --sink TOPIC [--duration S]: a marker subscriber that only counts\n"
+      "  latency_bench --reference-only [--bases ...] [--out FILE.csv]: the node's cycle in-process"};
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  std::string bases, balls, inflight, paces;  // comma lists
+  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")->default_str("5,16");
+  app.add_option("--balls", balls, "sphere piles: balls, comma list");
+  app.add_option("--steps", o.steps, "in-process steps before a problem is taken")->capture_default_str();
+  app.add_option("--count", o.count, "latency round trips measured")->capture_default_str();
+  app.add_option("--warmup", o.warmup, "round trips before the measured ones")->capture_default_str();
+  app.add_option("--rate-seconds", o.rate_seconds, "duration of each rate_N phase (s)")
+      ->capture_default_str();
+  app.add_option("--latency-seconds", o.latency_seconds,
+                 "latency phase at most this long once 10 are done (s)")
+      ->capture_default_str();
+  app.add_option("--inflight", inflight, "pairs in flight of the rate_N phases, comma list")
+      ->default_str("1,4");
+  app.add_option("--pace", paces, "Hz of the paced phases (a fixed clock), comma list");
+  app.add_option("--pace-seconds", o.pace_seconds, "duration of each paced phase (s)")->capture_default_str();
+  app.add_option("--label", o.label, "the CSV's label of the solver process")->capture_default_str();
+  app.add_option("--solver-pid", o.solver_pid, "the solver process, for its CPU time from /proc")
+      ->capture_default_str();
+  app.add_flag("--in-process-nodelet", o.in_process_nodelet, "load the nodelet here (nodelet::Loader)");
+  app.add_option("--markers", o.markers, "0|1: the node publishes markers")->capture_default_str();
+  app.add_option("--out", o.out, "the CSV to append to")->capture_default_str();
+  app.add_option("--sink", o.sink, "only count the messages on this topic (a marker subscriber)");
+  app.add_option("--duration", o.duration, "--sink: for this long (s; default: no limit)");
+  app.add_flag("--reference-only", o.reference_only, "only the in-process references of the node's cycle");
+  try {
+    app.parse(argc, argv);
+    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
+    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
+    if (app.count("--inflight")) o.inflight = lcs_bench::parseIntList(inflight);
+    if (app.count("--pace")) o.paces = lcs_bench::parseIntList(paces);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const std::exception& e) {  // a bad number in a comma list
+    std::fprintf(stderr, "latency: bad list value (%s)\n", e.what());
+    return 2;
   }
   return -1;
 }
