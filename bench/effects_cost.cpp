@@ -40,10 +40,10 @@
 // The parts: effects_cost_scenes.cpp (the variants, the pile, the rolling scenes),
 // effects_cost_measure.cpp (the measurements), effects_cost_report.cpp (CSV and tables).
 #include "effects_cost.h"
+#include "cli_options.h"
 #include "scene_problems.h"
 
 #include <unistd.h>
-#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <exception>
@@ -76,13 +76,13 @@ int parseOptions(int argc, char** argv, Options* options) {
   Options& o = *options;
   CLI::App app{"effects_cost: what each contact effect costs (in-process, CSV)"};
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  std::string bases, balls, gen_balls;  // comma lists
-  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")->default_str("5,9,16");
-  app.add_option("--balls", balls, "sphere piles: balls, comma list")->default_str("40,120,350");
+  lcs_bench::addIntListOption(app, "--bases", &o.bases, "brick pyramids: bricks at the base, comma list",
+                              "5,9,16");
+  lcs_bench::addIntListOption(app, "--balls", &o.balls, "sphere piles: balls, comma list", "40,120,350");
   app.add_option("--steps", o.steps, "in-process steps before a pile problem is taken")
       ->capture_default_str();
-  app.add_option("--gen-balls", gen_balls, "contact generation: balls in the bin, comma list")
-      ->default_str("100,400");
+  lcs_bench::addIntListOption(app, "--gen-balls", &o.gen_balls,
+                              "contact generation: balls in the bin, comma list", "100,400");
   app.add_option("--budget", o.budget, "wall-clock budget of a solve to a tolerance (s)")
       ->capture_default_str();
   app.add_option("--rounds", o.rounds, "interleaved rounds; the fastest counts")->capture_default_str();
@@ -90,18 +90,7 @@ int parseOptions(int argc, char** argv, Options* options) {
       ->capture_default_str();
   app.add_option("--rolling", o.rolling, "rolling friction of the 6-row contacts")->capture_default_str();
   app.add_option("--out", o.out, "the CSV to write")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
-    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
-    if (app.count("--gen-balls")) o.gen_balls = lcs_bench::parseIntList(gen_balls);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const std::exception& e) {  // a bad number in a comma list
-    std::fprintf(stderr, "effects_cost: bad list value (%s)\n", e.what());
-    return 2;
-  }
-  return -1;
+  return lcs_bench::parseArguments(app, argc, argv);
 }
 
 // The scene problems with 6-row contacts (generated from the rolling copies of the scenes).

@@ -32,13 +32,13 @@
 // the nodelet, its CPU time, the sink), latency_phases.cpp (the measurement loop),
 // latency_in_process.cpp (the in-process references, --reference-only), latency_report.cpp
 // (CSV and table).
+#include "cli_options.h"
 #include "latency_live.h"
 #include "scene_problems.h"
 
 #include "lcp_contact_solver/ros/msg_conversion/msg_conversion.h"
 
 #include <unistd.h>
-#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <fstream>
@@ -57,9 +57,9 @@ int parseOptions(int argc, char** argv, Options* options) {
       "  latency_bench --sink TOPIC [--duration S]: a marker subscriber that only counts\n"
       "  latency_bench --reference-only [--bases ...] [--out FILE.csv]: the node's cycle in-process"};
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  std::string bases, balls, inflight, paces;  // comma lists
-  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")->default_str("5,16");
-  app.add_option("--balls", balls, "sphere piles: balls, comma list");
+  lcs_bench::addIntListOption(app, "--bases", &o.bases, "brick pyramids: bricks at the base, comma list",
+                              "5,16");
+  lcs_bench::addIntListOption(app, "--balls", &o.balls, "sphere piles: balls, comma list", "");
   app.add_option("--steps", o.steps, "in-process steps before a problem is taken")->capture_default_str();
   app.add_option("--count", o.count, "latency round trips measured")->capture_default_str();
   app.add_option("--warmup", o.warmup, "round trips before the measured ones")->capture_default_str();
@@ -68,9 +68,10 @@ int parseOptions(int argc, char** argv, Options* options) {
   app.add_option("--latency-seconds", o.latency_seconds,
                  "latency phase at most this long once 10 are done (s)")
       ->capture_default_str();
-  app.add_option("--inflight", inflight, "pairs in flight of the rate_N phases, comma list")
-      ->default_str("1,4");
-  app.add_option("--pace", paces, "Hz of the paced phases (a fixed clock), comma list");
+  lcs_bench::addIntListOption(app, "--inflight", &o.inflight,
+                              "pairs in flight of the rate_N phases, comma list", "1,4");
+  lcs_bench::addIntListOption(app, "--pace", &o.paces, "Hz of the paced phases (a fixed clock), comma list",
+                              "");
   app.add_option("--pace-seconds", o.pace_seconds, "duration of each paced phase (s)")->capture_default_str();
   app.add_option("--label", o.label, "the CSV's label of the solver process")->capture_default_str();
   app.add_option("--solver-pid", o.solver_pid, "the solver process, for its CPU time from /proc")
@@ -81,19 +82,7 @@ int parseOptions(int argc, char** argv, Options* options) {
   app.add_option("--sink", o.sink, "only count the messages on this topic (a marker subscriber)");
   app.add_option("--duration", o.duration, "--sink: for this long (s; default: no limit)");
   app.add_flag("--reference-only", o.reference_only, "only the in-process references of the node's cycle");
-  try {
-    app.parse(argc, argv);
-    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
-    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
-    if (app.count("--inflight")) o.inflight = lcs_bench::parseIntList(inflight);
-    if (app.count("--pace")) o.paces = lcs_bench::parseIntList(paces);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const std::exception& e) {  // a bad number in a comma list
-    std::fprintf(stderr, "latency: bad list value (%s)\n", e.what());
-    return 2;
-  }
-  return -1;
+  return lcs_bench::parseArguments(app, argc, argv);
 }
 
 // Every contact at the origin with normal +z and that normal's rule tangents, given

@@ -27,12 +27,11 @@
 // iterations,residual,reached,seconds. A summary table (median per step) goes to stdout, and
 // for ours_pgs on one-row problems (scalar rows, scalar_rows.h) the bytes its sweeps read per
 // second beside the machine's stream bandwidth (a triad a = b + s c over 3 × 64 MB, best of 5).
+#include "cli_options.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "lcp_contact_solver/scene/mujoco_comparison.h"
-
-#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -314,11 +313,7 @@ int parseOptions(int argc, char** argv, Options* options) {
   app.add_option("--mujoco-tolerance", o.mujoco_tolerance,
                  "T > 0: MuJoCo's solvers also at their own stopping rule")
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = lcs_bench::parseArguments(app, argc, argv); code >= 0) return code;
   o.repeat = std::max(1, o.repeat);
   o.threads = std::max(0, o.threads);
   if (app.count("--ours")) o.ours = split(ours);

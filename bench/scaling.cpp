@@ -32,6 +32,7 @@
 // ratio dense sweep / (bytes of W / bandwidth): 1 means a sweep costs exactly one read of W.
 // Times are CPU time of the benchmark's thread (timing_util.h: the machine is shared), the
 // fastest of the repeats.
+#include "cli_options.h"
 #include "scene_problems.h"
 #include "timing_util.h"
 
@@ -40,7 +41,6 @@
 #include "lcp_contact_solver/core/islands.h"
 
 #include <unistd.h>
-#include <CLI/CLI.hpp>
 
 #include <array>
 #include <cmath>
@@ -186,10 +186,10 @@ int parseOptions(int argc, char** argv, Options* options) {
   Options& o = *options;
   CLI::App app{"scaling_bench: scaling from ~10 to ~10,000 contacts (in-process, CSV)"};
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  std::string bases, balls;  // comma lists
-  app.add_option("--bases", bases, "brick pyramids: bricks at the base, comma list")
-      ->default_str("2,5,16,28,50");
-  app.add_option("--balls", balls, "sphere piles: balls, comma list")->default_str("4,40,350,1000,2000");
+  lcs_bench::addIntListOption(app, "--bases", &o.bases, "brick pyramids: bricks at the base, comma list",
+                              "2,5,16,28,50");
+  lcs_bench::addIntListOption(app, "--balls", &o.balls, "sphere piles: balls, comma list",
+                              "4,40,350,1000,2000");
   app.add_option("--pyramid-steps", o.pyramid_steps, "in-process steps before a pyramid problem is taken")
       ->capture_default_str();
   app.add_option("--pile-steps", o.pile_steps, "in-process steps before a pile problem is taken")
@@ -203,20 +203,13 @@ int parseOptions(int argc, char** argv, Options* options) {
       ->capture_default_str();
   app.add_option("--copies", o.copies, "K > 1: each problem also K times side by side (islands)")
       ->capture_default_str();
+  app.add_option("--copies-max-contacts", o.copies_max_contacts,
+                 "copies only up to this many contacts in all")
+      ->capture_default_str();
   app.add_option("--threads", o.threads, "island threads (1: all in the measured thread)")
       ->capture_default_str();
   app.add_option("--out", o.out, "the CSV to write")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-    if (app.count("--bases")) o.bases = lcs_bench::parseIntList(bases);
-    if (app.count("--balls")) o.balls = lcs_bench::parseIntList(balls);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const std::exception& e) {  // a bad number in a comma list
-    std::fprintf(stderr, "scaling: bad list value (%s)\n", e.what());
-    return 2;
-  }
-  return -1;
+  return lcs_bench::parseArguments(app, argc, argv);
 }
 
 }  // namespace

@@ -11,12 +11,11 @@
 // alone; setup = t(10) - 10 sweeps (local blocks, block-column index, assembling W for the
 // built forms is listed apart). The forces after the same sweeps are compared with the
 // block-sparse ones (they are the same iteration).
+#include "cli_options.h"
 #include "scene_problems.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-
-#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -32,15 +31,6 @@ namespace lcs = lcp_contact_solver;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-std::vector<int> parseList(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(std::stoi(item));
-  return out;
-}
 
 double seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
@@ -92,25 +82,15 @@ int main(int argc, char** argv) {
   std::string out_path;
   CLI::App app{"unbuilt_scaling: the unbuilt solve against the built ones (storage, setup, sweep; CSV)"};
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  std::string bases_list, balls_list;  // comma lists
-  app.add_option("--bases", bases_list, "brick pyramids: bricks at the base, comma list")
-      ->default_str("4,8,12,16");
-  app.add_option("--balls", balls_list, "sphere piles: balls, comma list")->default_str("100,300,1000");
+  lcs_bench::addIntListOption(app, "--bases", &bases, "brick pyramids: bricks at the base, comma list",
+                              "4,8,12,16");
+  lcs_bench::addIntListOption(app, "--balls", &balls, "sphere piles: balls, comma list", "100,300,1000");
   app.add_option("--steps", steps, "in-process steps before a problem is taken")->capture_default_str();
   app.add_option("--sweeps", sweeps, "sweeps timed per run")->capture_default_str();
   app.add_option("--dense-max-rows", dense_max_rows, "dense W skipped above this many rows")
       ->capture_default_str();
   app.add_option("--out", out_path, "the CSV to write (default: stdout)");
-  try {
-    app.parse(argc, argv);
-    if (app.count("--bases")) bases = parseList(bases_list);
-    if (app.count("--balls")) balls = parseList(balls_list);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const std::exception& e) {  // a bad number in a comma list
-    std::cerr << "unbuilt_scaling: bad list value (" << e.what() << ")\n";
-    return 2;
-  }
+  if (const int code = lcs_bench::parseArguments(app, argc, argv); code >= 0) return code;
   std::ofstream file;
   if (!out_path.empty()) file.open(out_path);
   std::ostream& out = out_path.empty() ? std::cout : file;
