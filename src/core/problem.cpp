@@ -144,26 +144,75 @@ bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance) {
     return true;
   }
   const auto& B = std::get<BlockSparseMatrix>(W);
+  const int nb = B.blockCount();
   double largest = 1e-300;
   for (double v : B.values) largest = std::max(largest, std::abs(v));
   const double tol = relative_tolerance * largest;
-  // Each stored block (i, j) against its mirror (j, i), found in block row j; a block whose
-  // mirror is not stored must be zero to within tol.
-  for (int bi = 0; bi < B.blockCount(); ++bi) {
-    const int rows = B.block_offset[bi + 1] - B.block_offset[bi];
-    for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
-      const int bj = B.block_col[s];
-      const int cols = B.block_offset[bj + 1] - B.block_offset[bj];
-      const double* v = B.values.data() + B.value_start[s];
-      const double* mirror = nullptr;
-      for (int t = B.row_start[bj]; t < B.row_start[bj + 1] && mirror == nullptr; ++t)
-        if (B.block_col[t] == bi) mirror = B.values.data() + B.value_start[t];
-      for (int r = 0; r < rows; ++r)
-        for (int c = 0; c < cols; ++c) {
-          const double m = mirror != nullptr ? mirror[c * rows + r] : 0.0;  // mirror is cols × rows
-          if (std::abs(v[r * cols + c] - m) > tol) return false;
-        }
+  auto near = [tol](double a, double b) { return std::abs(a - b) <= tol; };
+  // Rows whose blocks are in column order (what the scene layer, the message conversion and the
+  // MuJoCo adapter write): each block's mirror by binary search, nothing allocated (auto asks
+  // this of every island, many of them a few dozen rows).
+  bool sorted = true;
+  for (int i = 0; i < nb && sorted; ++i)
+    for (int s = B.row_start[i] + 1; s < B.row_start[i + 1] && sorted; ++s)
+      sorted = B.block_col[s - 1] < B.block_col[s];
+  if (sorted) {
+    for (int i = 0; i < nb; ++i) {
+      const int rows_i = B.block_offset[i + 1] - B.block_offset[i];
+      for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
+        const int k = B.block_col[s];
+        const int rows_k = B.block_offset[k + 1] - B.block_offset[k];
+        const auto first = B.block_col.begin() + B.row_start[k],
+                   last = B.block_col.begin() + B.row_start[k + 1];
+        const auto at = std::lower_bound(first, last, i);
+        const double* v = B.values.data() + B.value_start[s];  // rows_i × rows_k
+        const double* m = at != last && *at == i ? B.values.data() + B.value_start[at - B.block_col.begin()]
+                                                 : nullptr;  // rows_k × rows_i
+        for (int r = 0; r < rows_i; ++r)
+          for (int q = 0; q < rows_k; ++q)
+            if (!near(v[r * rows_k + q], m != nullptr ? m[q * rows_i + r] : 0.0)) return false;
+      }
     }
+    return true;
+  }
+  // Otherwise the stored blocks by block column (a counting sort, O(stored blocks)): column i lists the
+  // blocks (k, i), whose mirrors (i, k) are found through `in_row`, the blocks of row i by column.
+  std::vector<int> column_start(nb + 1, 0), by_column(B.block_col.size()), row_of(B.block_col.size());
+  for (int j : B.block_col) ++column_start[j + 1];
+  for (int j = 0; j < nb; ++j) column_start[j + 1] += column_start[j];
+  std::vector<int> fill(column_start.begin(), column_start.end() - 1);
+  for (int i = 0; i < nb; ++i)
+    for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
+      row_of[s] = i;
+      by_column[fill[B.block_col[s]]++] = s;
+    }
+  std::vector<int> in_row(nb, -1);
+  std::vector<char> in_column(nb, 0);
+  for (int i = 0; i < nb; ++i) {
+    const int rows_i = B.block_offset[i + 1] - B.block_offset[i];
+    for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) in_row[B.block_col[s]] = s;
+    for (int c = column_start[i]; c < column_start[i + 1]; ++c) in_column[row_of[by_column[c]]] = 1;
+    // Every block (k, i) against its mirror (i, k), stored or zero.
+    for (int c = column_start[i]; c < column_start[i + 1]; ++c) {
+      const int t = by_column[c], k = row_of[t];
+      const int rows_k = B.block_offset[k + 1] - B.block_offset[k];
+      const double* v = B.values.data() + B.value_start[t];  // rows_k × rows_i
+      const double* m =
+          in_row[k] >= 0 ? B.values.data() + B.value_start[in_row[k]] : nullptr;  // rows_i × rows_k
+      for (int r = 0; r < rows_k; ++r)
+        for (int q = 0; q < rows_i; ++q)
+          if (!near(v[r * rows_i + q], m != nullptr ? m[q * rows_k + r] : 0.0)) return false;
+    }
+    // A stored (i, k) whose mirror (k, i) is not stored must be zero.
+    for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
+      const int k = B.block_col[s];
+      if (in_column[k]) continue;
+      const int n = rows_i * (B.block_offset[k + 1] - B.block_offset[k]);
+      for (int e = 0; e < n; ++e)
+        if (!near(B.values[B.value_start[s] + e], 0.0)) return false;
+    }
+    for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) in_row[B.block_col[s]] = -1;
+    for (int c = column_start[i]; c < column_start[i + 1]; ++c) in_column[row_of[by_column[c]]] = 0;
   }
   return true;
 }

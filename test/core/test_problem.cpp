@@ -107,29 +107,35 @@ TEST(Problem, SymmetryIsReadInEitherStorage) {
   Eigen::MatrixXd S = A + A.transpose();
   S.block(0, 4, 3, 2).setZero();  // contacts 0 and 2 not coupled: no blocks stored there
   S.block(4, 0, 2, 3).setZero();
-  const auto blocked = [&](const Eigen::MatrixXd& M) {
+  // Blocks in column order (read by binary search), or in reverse (read through a column index).
+  const auto blockedInOrder = [&](const Eigen::MatrixXd& M, bool reverse) {
     BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
     std::vector<int> start = {0, 3, 4, 6, 9};
     for (int i = 0; i < 4; ++i) {
       B.beginRow();
-      for (int j = 0; j < 4; ++j) {
+      for (int c = 0; c < 4; ++c) {
+        const int j = reverse ? 3 - c : c;
         const Eigen::MatrixXd block = M.block(start[i], start[j], sizes[i], sizes[j]);
         if (block.cwiseAbs().maxCoeff() > 0.0) B.addBlock(j, block);
       }
     }
     return B;
   };
-  EXPECT_TRUE(isSymmetric(ComplianceMatrix(S), 1e-12));
-  EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(S)), 1e-12));
-  Eigen::MatrixXd moved = S;
-  moved(7, 2) += 1e-6;
-  EXPECT_FALSE(isSymmetric(ComplianceMatrix(moved), 1e-12));
-  EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-12));
-  EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-3));  // within a looser tolerance
-  Eigen::MatrixXd one_sided = S;
-  one_sided(0, 4) = 0.5;  // block (0, 2) stored, its mirror (2, 0) not
-  EXPECT_FALSE(isSymmetric(ComplianceMatrix(one_sided), 1e-12));
-  EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(one_sided)), 1e-12));
+  for (bool reverse : {false, true}) {
+    SCOPED_TRACE(reverse ? "blocks in reverse column order" : "blocks in column order");
+    const auto blocked = [&](const Eigen::MatrixXd& M) { return blockedInOrder(M, reverse); };
+    EXPECT_TRUE(isSymmetric(ComplianceMatrix(S), 1e-12));
+    EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(S)), 1e-12));
+    Eigen::MatrixXd moved = S;
+    moved(7, 2) += 1e-6;
+    EXPECT_FALSE(isSymmetric(ComplianceMatrix(moved), 1e-12));
+    EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-12));
+    EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-3));  // within a looser tolerance
+    Eigen::MatrixXd one_sided = S;
+    one_sided(0, 4) = 0.5;  // block (0, 2) stored, its mirror (2, 0) not
+    EXPECT_FALSE(isSymmetric(ComplianceMatrix(one_sided), 1e-12));
+    EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(one_sided)), 1e-12));
+  }
 }
 
 }  // namespace
