@@ -149,9 +149,32 @@ bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance) {
   for (double v : B.values) largest = std::max(largest, std::abs(v));
   const double tol = relative_tolerance * largest;
   auto near = [tol](double a, double b) { return std::abs(a - b) <= tol; };
+  // A small W (auto asks this of every island, most of them a few dozen rows): scattered into
+  // a dense scratch and compared there, a few microseconds.
+  constexpr int kDenseCheckRows = 128;
+  const int n = B.rows();
+  if (n <= kDenseCheckRows) {
+    thread_local std::vector<double> dense;
+    dense.assign(static_cast<std::size_t>(n) * n, 0.0);
+    for (int i = 0; i < nb; ++i) {
+      const int r0 = B.block_offset[i], rows = B.block_offset[i + 1] - r0;
+      for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
+        const int c0 = B.block_offset[B.block_col[s]];
+        const int cols = B.block_offset[B.block_col[s] + 1] - c0;
+        const double* v = B.values.data() + B.value_start[s];
+        for (int r = 0; r < rows; ++r)
+          for (int c = 0; c < cols; ++c)
+            dense[static_cast<std::size_t>(r0 + r) * n + c0 + c] = v[r * cols + c];
+      }
+    }
+    for (int r = 0; r < n; ++r)
+      for (int c = r + 1; c < n; ++c)
+        if (!near(dense[static_cast<std::size_t>(r) * n + c], dense[static_cast<std::size_t>(c) * n + r]))
+          return false;
+    return true;
+  }
   // Rows whose blocks are in column order (what the scene layer, the message conversion and the
-  // MuJoCo adapter write): each block's mirror by binary search, nothing allocated (auto asks
-  // this of every island, many of them a few dozen rows).
+  // MuJoCo adapter write): each block's mirror by binary search, nothing allocated.
   bool sorted = true;
   for (int i = 0; i < nb && sorted; ++i)
     for (int s = B.row_start[i] + 1; s < B.row_start[i + 1] && sorted; ++s)

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <string>
 
 namespace lcp_contact_solver::core {
 namespace {
@@ -101,40 +102,58 @@ TEST(Problem, SolverNamesRoundTrip) {
 // a symmetric W (blocks of 1, 2 and 3 rows, some pairs stored both ways), one entry moved,
 // and a block whose mirror is not stored.
 TEST(Problem, SymmetryIsReadInEitherStorage) {
-  const std::vector<int> sizes = {3, 1, 2, 3};
-  const int n = 9;
-  Eigen::MatrixXd A = Eigen::MatrixXd::Random(n, n);
-  Eigen::MatrixXd S = A + A.transpose();
-  S.block(0, 4, 3, 2).setZero();  // contacts 0 and 2 not coupled: no blocks stored there
-  S.block(4, 0, 2, 3).setZero();
-  // Blocks in column order (read by binary search), or in reverse (read through a column index).
-  const auto blockedInOrder = [&](const Eigen::MatrixXd& M, bool reverse) {
-    BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
-    std::vector<int> start = {0, 3, 4, 6, 9};
-    for (int i = 0; i < 4; ++i) {
-      B.beginRow();
-      for (int c = 0; c < 4; ++c) {
-        const int j = reverse ? 3 - c : c;
-        const Eigen::MatrixXd block = M.block(start[i], start[j], sizes[i], sizes[j]);
-        if (block.cwiseAbs().maxCoeff() > 0.0) B.addBlock(j, block);
+  // 9 rows (read through a dense scratch) and 20 times as many (read in the blocks).
+  for (int copies : {1, 20}) {
+    std::vector<int> sizes;
+    for (int k = 0; k < copies; ++k) sizes.insert(sizes.end(), {3, 1, 2, 3});
+    std::vector<int> start = {0};
+    for (int size : sizes) start.push_back(start.back() + size);
+    const int n = start.back(), nb = static_cast<int>(sizes.size());
+    Eigen::MatrixXd A = Eigen::MatrixXd::Random(n, n);
+    Eigen::MatrixXd S = A + A.transpose();
+    for (int i = 0; i < nb; ++i)  // some pairs of contacts not coupled: no blocks stored there
+      for (int j = 0; j < nb; ++j)
+        if ((i + 2 * j) % 5 == 0 && i != j) S.block(start[i], start[j], sizes[i], sizes[j]).setZero();
+    S = 0.5 * (S + S.transpose()).eval();
+    for (int i = 0; i < nb; ++i)
+      for (int j = 0; j < nb; ++j)
+        if ((i + 2 * j) % 5 == 0 && i != j) {
+          S.block(start[i], start[j], sizes[i], sizes[j]).setZero();
+          S.block(start[j], start[i], sizes[j], sizes[i]).setZero();
+        }
+    // Blocks in column order (read by binary search), or in reverse (through a column index).
+    const auto blocked = [&](const Eigen::MatrixXd& M, bool reverse) {
+      BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
+      for (int i = 0; i < nb; ++i) {
+        B.beginRow();
+        for (int c = 0; c < nb; ++c) {
+          const int j = reverse ? nb - 1 - c : c;
+          const Eigen::MatrixXd block = M.block(start[i], start[j], sizes[i], sizes[j]);
+          if (block.cwiseAbs().maxCoeff() > 0.0) B.addBlock(j, block);
+        }
       }
-    }
-    return B;
-  };
-  for (bool reverse : {false, true}) {
-    SCOPED_TRACE(reverse ? "blocks in reverse column order" : "blocks in column order");
-    const auto blocked = [&](const Eigen::MatrixXd& M) { return blockedInOrder(M, reverse); };
-    EXPECT_TRUE(isSymmetric(ComplianceMatrix(S), 1e-12));
-    EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(S)), 1e-12));
+      return B;
+    };
     Eigen::MatrixXd moved = S;
     moved(7, 2) += 1e-6;
+    Eigen::MatrixXd one_sided = S;  // a block stored whose mirror is not
+    for (int i = 0; i < nb && one_sided == S; ++i)
+      for (int j = 0; j < nb; ++j)
+        if (S.block(start[i], start[j], sizes[i], sizes[j]).isZero(0.0) && i != j) {
+          one_sided(start[i], start[j]) = 0.5;
+          break;
+        }
+    ASSERT_NE(one_sided, S);
+    EXPECT_TRUE(isSymmetric(ComplianceMatrix(S), 1e-12));
     EXPECT_FALSE(isSymmetric(ComplianceMatrix(moved), 1e-12));
-    EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-12));
-    EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(moved)), 1e-3));  // within a looser tolerance
-    Eigen::MatrixXd one_sided = S;
-    one_sided(0, 4) = 0.5;  // block (0, 2) stored, its mirror (2, 0) not
     EXPECT_FALSE(isSymmetric(ComplianceMatrix(one_sided), 1e-12));
-    EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(one_sided)), 1e-12));
+    for (bool reverse : {false, true}) {
+      SCOPED_TRACE(std::to_string(n) + " rows, blocks in " + (reverse ? "reverse " : "") + "column order");
+      EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(S, reverse)), 1e-12));
+      EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(moved, reverse)), 1e-12));
+      EXPECT_TRUE(isSymmetric(ComplianceMatrix(blocked(moved, reverse)), 1e-3));  // a looser tolerance
+      EXPECT_FALSE(isSymmetric(ComplianceMatrix(blocked(one_sided, reverse)), 1e-12));
+    }
   }
 }
 
