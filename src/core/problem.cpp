@@ -135,70 +135,32 @@ int complianceCols(const ComplianceMatrix& W) {
   return std::get<BlockSparseMatrix>(W).rows();
 }
 
+namespace {
+
+bool denseIsSymmetric(const Eigen::MatrixXd& M, double relative_tolerance) {
+  const double tol = relative_tolerance * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
+  for (Eigen::Index j = 0; j < M.cols(); ++j)
+    for (Eigen::Index i = j + 1; i < M.rows(); ++i)
+      if (std::abs(M(i, j) - M(j, i)) > tol) return false;
+  return true;
+}
+
+}  // namespace
+
 bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance) {
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W)) {
-    const double tol = relative_tolerance * std::max(dense->cwiseAbs().maxCoeff(), 1e-300);
-    for (Eigen::Index j = 0; j < dense->cols(); ++j)
-      for (Eigen::Index i = j + 1; i < dense->rows(); ++i)
-        if (std::abs((*dense)(i, j) - (*dense)(j, i)) > tol) return false;
-    return true;
-  }
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&W))
+    return denseIsSymmetric(*dense, relative_tolerance);
   const auto& B = std::get<BlockSparseMatrix>(W);
+  // A small W (auto asks this of every island, most of them a few dozen rows) is cheapest
+  // compared dense: a few microseconds.
+  constexpr int kDenseCheckRows = 128;
+  if (B.rows() <= kDenseCheckRows) return denseIsSymmetric(B.toDense(), relative_tolerance);
   const int nb = B.blockCount();
   double largest = 1e-300;
   for (double v : B.values) largest = std::max(largest, std::abs(v));
   const double tol = relative_tolerance * largest;
   auto near = [tol](double a, double b) { return std::abs(a - b) <= tol; };
-  // A small W (auto asks this of every island, most of them a few dozen rows): scattered into
-  // a dense scratch and compared there, a few microseconds.
-  constexpr int kDenseCheckRows = 128;
-  const int n = B.rows();
-  if (n <= kDenseCheckRows) {
-    thread_local std::vector<double> dense;
-    dense.assign(static_cast<std::size_t>(n) * n, 0.0);
-    for (int i = 0; i < nb; ++i) {
-      const int r0 = B.block_offset[i], rows = B.block_offset[i + 1] - r0;
-      for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
-        const int c0 = B.block_offset[B.block_col[s]];
-        const int cols = B.block_offset[B.block_col[s] + 1] - c0;
-        const double* v = B.values.data() + B.value_start[s];
-        for (int r = 0; r < rows; ++r)
-          for (int c = 0; c < cols; ++c)
-            dense[static_cast<std::size_t>(r0 + r) * n + c0 + c] = v[r * cols + c];
-      }
-    }
-    for (int r = 0; r < n; ++r)
-      for (int c = r + 1; c < n; ++c)
-        if (!near(dense[static_cast<std::size_t>(r) * n + c], dense[static_cast<std::size_t>(c) * n + r]))
-          return false;
-    return true;
-  }
-  // Rows whose blocks are in column order (what the scene layer, the message conversion and the
-  // MuJoCo adapter write): each block's mirror by binary search, nothing allocated.
-  bool sorted = true;
-  for (int i = 0; i < nb && sorted; ++i)
-    for (int s = B.row_start[i] + 1; s < B.row_start[i + 1] && sorted; ++s)
-      sorted = B.block_col[s - 1] < B.block_col[s];
-  if (sorted) {
-    for (int i = 0; i < nb; ++i) {
-      const int rows_i = B.block_offset[i + 1] - B.block_offset[i];
-      for (int s = B.row_start[i]; s < B.row_start[i + 1]; ++s) {
-        const int k = B.block_col[s];
-        const int rows_k = B.block_offset[k + 1] - B.block_offset[k];
-        const auto first = B.block_col.begin() + B.row_start[k],
-                   last = B.block_col.begin() + B.row_start[k + 1];
-        const auto at = std::lower_bound(first, last, i);
-        const double* v = B.values.data() + B.value_start[s];  // rows_i × rows_k
-        const double* m = at != last && *at == i ? B.values.data() + B.value_start[at - B.block_col.begin()]
-                                                 : nullptr;  // rows_k × rows_i
-        for (int r = 0; r < rows_i; ++r)
-          for (int q = 0; q < rows_k; ++q)
-            if (!near(v[r * rows_k + q], m != nullptr ? m[q * rows_i + r] : 0.0)) return false;
-      }
-    }
-    return true;
-  }
-  // Otherwise the stored blocks by block column (a counting sort, O(stored blocks)): column i lists the
+  // The stored blocks by block column (a counting sort, O(stored blocks)): column i lists the
   // blocks (k, i), whose mirrors (i, k) are found through `in_row`, the blocks of row i by column.
   std::vector<int> column_start(nb + 1, 0), by_column(B.block_col.size()), row_of(B.block_col.size());
   for (int j : B.block_col) ++column_start[j + 1];

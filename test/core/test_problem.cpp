@@ -102,7 +102,7 @@ TEST(Problem, SolverNamesRoundTrip) {
 // a symmetric W (blocks of 1, 2 and 3 rows, some pairs stored both ways), one entry moved,
 // and a block whose mirror is not stored.
 TEST(Problem, SymmetryIsReadInEitherStorage) {
-  // 9 rows (read through a dense scratch) and 20 times as many (read in the blocks).
+  // 9 rows (compared dense) and 20 times as many (read in the blocks).
   for (int copies : {1, 20}) {
     std::vector<int> sizes;
     for (int k = 0; k < copies; ++k) sizes.insert(sizes.end(), {3, 1, 2, 3});
@@ -121,7 +121,7 @@ TEST(Problem, SymmetryIsReadInEitherStorage) {
           S.block(start[i], start[j], sizes[i], sizes[j]).setZero();
           S.block(start[j], start[i], sizes[j], sizes[i]).setZero();
         }
-    // Blocks in column order (read by binary search), or in reverse (through a column index).
+    // Blocks in column order or in reverse: the block path must not depend on the order.
     const auto blocked = [&](const Eigen::MatrixXd& M, bool reverse) {
       BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
       for (int i = 0; i < nb; ++i) {
