@@ -1,35 +1,16 @@
 // One test per SOFA LCPConstraintSolver field the core honours; each fails if the field's
 // meaning is lost. (computeConstraintForces, showCellWidth and showTranslation act in the
 // ROS layer and are tested there.)
+#include "solvers_test_util.h"
+
 #include "lcp_contact_solver/core/contact_solver.h"
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <random>
-
 namespace lcp_contact_solver::core {
 namespace {
 
-// A random, well-posed frictional problem: W = J Jᵀ + εI (positive definite), pressed.
-Problem randomFrictionalProblem(int contacts, unsigned seed, double mu = 0.5) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const int n = 3 * contacts;
-  Eigen::MatrixXd J(n, n + 6);
-  for (int i = 0; i < J.rows(); ++i)
-    for (int j = 0; j < J.cols(); ++j) J(i, j) = u(rng);
-  Problem p;
-  for (int c = 0; c < contacts; ++c) p.contacts.push_back(Contact{100 + c, ContactType::kFrictional, 3, mu});
-  p.W = Eigen::MatrixXd(J * J.transpose() / n + 1e-3 * Eigen::MatrixXd::Identity(n, n));
-  p.d_free.resize(n);
-  for (int c = 0; c < contacts; ++c) {
-    p.d_free[3 * c] = -0.5 - 0.5 * std::abs(u(rng));
-    p.d_free[3 * c + 1] = 0.3 * u(rng);
-    p.d_free[3 * c + 2] = 0.3 * u(rng);
-  }
-  return p;
-}
+using solvers_test::randomFrictionalProblem;
 
 SolverParams withSolver(SolverKind kind) {
   SolverParams params;
