@@ -4,7 +4,7 @@
 // from the returned forces for every solver alike. See docs/BENCHMARKS.md.
 //
 //   work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]
-//                  [--families fc3d,lcp,scenes] [--filter SUBSTRING] [--solvers a,b,...]
+//                  [--families fc3d,lcp,scenes,mujoco] [--filter SUBSTRING] [--solvers a,b,...]
 //                  [--quick] [--regret FILE]
 //
 // At the end it writes the "auto regret" table (markdown, --regret, default
@@ -56,7 +56,8 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
   app.add_option("--out", opt.out, "the CSV to write")->capture_default_str();
   CLI::Option* budget_opt = app.add_option("--budget", budget, "wall-clock budget per solve (s)");
   budget_opt->capture_default_str();
-  app.add_option("--families", families, "fc3d,lcp,scenes (comma list)")->default_str("fc3d,lcp,scenes");
+  app.add_option("--families", families, "fc3d,lcp,scenes,mujoco (comma list)")
+      ->default_str("fc3d,lcp,scenes,mujoco");
   app.add_option("--filter", opt.filter, "only problems whose name holds SUBSTRING");
   app.add_option("--solvers", solvers, "only these solvers and peers (comma list; default all)");
   CLI::Option* tolerances_opt = app.add_option("--tolerances", tolerances, "the tolerance sweep (comma list)")

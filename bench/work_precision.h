@@ -17,6 +17,9 @@
 #ifndef LCS_PROBLEMS_DIR
 #define LCS_PROBLEMS_DIR "../shared/problems"
 #endif
+#ifndef LCS_MUJOCO_MODEL_DIR
+#define LCS_MUJOCO_MODEL_DIR "/usr/share/mujoco/model"
+#endif
 #ifndef LCS_SCENES_DIR
 #define LCS_SCENES_DIR "config/scenes"
 #endif
@@ -37,13 +40,18 @@ struct Options {
   int min_repeats = 3;     // ...and at least this many
   int max_repeats = 25;
   double single_above = 0.5;  // s, a first run longer than this is not repeated
-  std::set<std::string> families = {"fc3d", "lcp", "scenes"};
+  std::set<std::string> families = {"fc3d", "lcp", "scenes", "mujoco"};
   std::string filter;
   std::set<std::string> solvers;  // empty = all
   std::vector<double> tolerances = {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10};
   std::vector<int> pyramid_bases = {2, 3, 5, 9, 16};
   std::vector<int> pile_balls = {4, 12, 40, 120, 350};
   int scene_steps = 30;
+  // The mujoco family (work_precision_mujoco.cpp; only when built with MuJoCo).
+  std::vector<std::string> mujoco_models = {
+      LCS_MUJOCO_MODEL_DIR "/humanoid/22_humanoids.xml", LCS_MUJOCO_MODEL_DIR "/humanoid100/humanoid100.xml",
+      LCS_MUJOCO_MODEL_DIR "/composite/particle.xml", LCS_MUJOCO_MODEL_DIR "/composite/rope.xml"};
+  std::vector<int> mujoco_steps = {100, 300};
 };
 
 struct BenchProblem {
@@ -75,11 +83,15 @@ struct Row {
   double time_median = kNaN, time_min = kNaN;
   int repeats = 0;
   double residual = kNaN, model_residual = kNaN, peer_error = kNaN;
+  std::string path;  // ours: SolveResult::solver (auto's members, e.g. auto:newton->prox)
 };
 
 // ---- problems (work_precision_problems.cpp) ----
-// The fc3d and lcp problem files of the wanted families, then the generated scene problems.
+// The fc3d and lcp problem files of the wanted families, the generated scene problems, then
+// the MuJoCo steps.
 std::vector<BenchProblem> loadProblems(const Options& opt);
+// The steps of MuJoCo's models (work_precision_mujoco.cpp; without MuJoCo, none).
+void addMujocoProblems(const Options& opt, std::vector<BenchProblem>* out);
 
 // ---- runs (work_precision_runs.cpp) ----
 std::vector<OurSolver> ourSolvers();

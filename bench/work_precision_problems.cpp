@@ -1,5 +1,6 @@
 // The problems of the work-precision study: the fc3d and lcp problem files of the shared
-// problem folder, and the scene problems generated in-process (scene_problems.h).
+// problem folder, the scene problems generated in-process (scene_problems.h) and the steps
+// of MuJoCo's models (work_precision_mujoco.cpp).
 #include "scene_problems.h"
 #include "work_precision.h"
 
@@ -111,6 +112,7 @@ std::vector<BenchProblem> loadProblems(const Options& opt) {
   std::vector<BenchProblem> out;
   addProblemFiles(opt, &out);
   addSceneProblems(opt, &out);
+  addMujocoProblems(opt, &out);
   return out;
 }
 

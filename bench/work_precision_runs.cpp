@@ -71,7 +71,7 @@ void writeRow(std::ostream& os, const Row& r) {
   os << r.family << ',' << r.problem << ',' << r.contacts << ',' << r.rows << ',' << r.solver << ','
      << r.setting << ',' << fmt(r.tolerance) << ',' << r.status << ',' << (r.converged ? 1 : 0) << ','
      << r.iterations << ',' << fmt(r.time_median) << ',' << fmt(r.time_min) << ',' << r.repeats << ','
-     << fmt(r.residual) << ',' << fmt(r.model_residual) << ',' << fmt(r.peer_error) << '\n';
+     << fmt(r.residual) << ',' << fmt(r.model_residual) << ',' << fmt(r.peer_error) << ',' << r.path << '\n';
   os.flush();
 }
 
@@ -150,7 +150,7 @@ std::string fmt(double v) {
 
 void writeHeader(std::ostream& os) {
   os << "family,problem,contacts,rows,solver,setting,tolerance,status,converged,iterations,"
-        "time_s,time_min_s,repeats,residual,model_residual,peer_error\n";
+        "time_s,time_min_s,repeats,residual,model_residual,peer_error,path\n";
 }
 
 const std::vector<Row>& writtenRows() { return g_rows; }
@@ -193,6 +193,7 @@ void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std
     row.converged = result.converged;
     row.iterations = result.iterations;
     row.residual = result.residual;
+    row.path = result.solver;
     // The independent recomputation must agree with the core's own report.
     const double check = discResidual(bp.problem, result.forces);
     if (std::abs(check - result.residual) > 1e-9 * std::max(1.0, check))
