@@ -53,11 +53,17 @@ constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start 
 // below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;
-constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+constexpr double kAutoSparseGsTolerance = 1e-4;  // block-sparse W: Gauss-Seidel first down to this
+constexpr double kAutoStrongDominant = 0.25;     // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+// The rate watch: a first-order member whose projected time to the tolerance is above this
+// multiple of the time spent lets the next member try once (its cost is then at most 1/ratio
+// of the rest of the solve when the first member was the right one).
+constexpr double kProbeRatio = 1.0;
 
 struct AutoFeatures {
   int rows = 0;
   double coupling = 0.0;        // mean normal off-diagonal / diagonal ratio
+  double gs_bound = 0.0;        // Gauss-Seidel's contraction bound (Coupling::gs_bound)
   bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
   bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
   bool sparse = false;          // block-sparse W
@@ -70,26 +76,37 @@ struct AutoFeatures {
 // DoF can tell apart, the rank-deficiency estimate when the bodies are not known.
 struct Coupling {
   double kappa = 0.0;
+  // max_i Σ_{j>i} |W_ij| / (W_ii − Σ_{j<i} |W_ij|), infinite where a denominator is not
+  // positive: the ∞-norm bound on Gauss-Seidel's iteration matrix (D + L)⁻¹U; below 1 a sweep
+  // contracts (a strictly dominant W, and a triangular one, where one sweep is exact).
+  double gs_bound = 0.0;
   double redundant = 0.0;
 };
+
+// W_nn of contact i: its first diagonal entry (a block-sparse W's stored diagonal block; 0
+// when none is stored). The body form has no W: 0.
+double normalDiagonal(const SolveContext& ctx, int i) {
+  const Problem& p = *ctx.problem;
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) return (*dense)(ctx.offsets[i], ctx.offsets[i]);
+  double w = 0.0;
+  if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
+    if (i >= sparse->blockCount()) return 0.0;
+    for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
+      if (sparse->block_col[b] == i) w += sparse->values[sparse->value_start[b]];
+  }
+  return w;
+}
 
 Coupling normalCoupling(const SolveContext& ctx) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
-  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0);
+  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0), lower_sum(nc, 0.0);
   std::vector<bool> redundant(nc, false);
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  if (dense) {
-    for (int i = 0; i < nc; ++i) diag[i] = (*dense)(ctx.offsets[i], ctx.offsets[i]);
-  } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
-    // W_nn of each contact from its stored diagonal block (a one-row window through
-    // diagonalBlock scanned every block row: quadratic in the contacts).
-    for (int i = 0; i < sparse->blockCount() && i < nc; ++i)
-      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
-        if (sparse->block_col[b] == i) diag[i] += sparse->values[sparse->value_start[b]];
-  }
+  for (int i = 0; i < nc; ++i) diag[i] = normalDiagonal(ctx, i);
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
+    if (j < i) lower_sum[i] += std::abs(w);
     if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j]))
       redundant[i] = true;
   };
@@ -108,17 +125,21 @@ Coupling normalCoupling(const SolveContext& ctx) {
       }
     }
   }
-  double sum = 0.0;
+  double sum = 0.0, gs_bound = 0.0;
   int active = 0, repeated = 0;
   for (int i = 0; i < nc; ++i) {
     if (ctx.ignored[i] || diag[i] <= 0.0) continue;  // no diagonal: Gauss-Seidel cannot use the row
     sum += off_sum[i] / diag[i];
+    const double pivot = diag[i] - lower_sum[i];
+    gs_bound = std::max(gs_bound, pivot > 0.0 ? (off_sum[i] - lower_sum[i]) / pivot
+                                              : std::numeric_limits<double>::infinity());
     repeated += redundant[i] ? 1 : 0;
     ++active;
   }
   Coupling c;
   if (active > 0) {
     c.kappa = sum / active;
+    c.gs_bound = gs_bound;
     c.redundant = static_cast<double>(repeated) / active;
   }
   return c;
@@ -131,6 +152,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
   if (!f.body_form) {
     const Coupling c = normalCoupling(ctx);
     f.coupling = c.kappa;
+    f.gs_bound = c.gs_bound;
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
@@ -146,37 +168,67 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
   return f;
 }
 
-std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f) {
+// Gauss-Seidel can start: every active contact has a positive normal diagonal.
+bool positiveDiagonal(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    if (!(normalDiagonal(ctx, static_cast<int>(i)) + ctx.regularization > 0.0)) return false;
+  }
+  return true;
+}
+
+int activeContacts(const SolveContext& ctx) {
+  int n = 0;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) n += ctx.ignored[i] ? 0 : 1;
+  return n;
+}
+
+std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
-  if (!ctx.hasFriction() && f.body_form) return {K::kPgs, K::kNewton, K::kApgd};  // unbuilt first: no W
-  if (!ctx.hasFriction()) {
-    // An LCP: projected Gauss-Seidel converges for a symmetric W with positive diagonal;
-    // otherwise (or coupled) Lemke's pivoting is exact and, up to a dense tableau of
-    // kAutoLemkeRows, cheap.
+  const bool friction = ctx.hasFriction();
+  if (friction && pyramidModel(p)) return {K::kPgs, K::kLemke};
+  // One contact (most islands of a scene at rest): Gauss-Seidel's local step is that
+  // contact's own exact solve, so no feature is worth measuring.
+  if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && positiveDiagonal(ctx))
+    return friction ? std::vector<K>{K::kNlgs, K::kNewton, K::kApgd, K::kProx}
+                    : std::vector<K>{K::kPgs, K::kLemke, K::kNewton, K::kApgd};
+  if (ctx.problem->bodies)  // unbuilt first: no W
+    return friction ? std::vector<K>{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
+                    : std::vector<K>{K::kPgs, K::kNewton, K::kApgd};
+  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof);
+  if (!friction) {
+    // An LCP. Symmetric W (a convex QP): newton's active-set path ends in a few Cholesky
+    // steps whatever the coupling; projected Gauss-Seidel only where W is so diagonally
+    // dominant that a few sweeps contract it (κ < 1/4: a Jacobi bound of 4x per sweep).
+    // Non-symmetric: Gauss-Seidel where its sweep provably contracts (gs_bound < 1: a
+    // strictly dominant or a triangular W); otherwise Lemke's pivoting is exact and, up to a dense
+    // tableau of kAutoLemkeRows, cheap.
     if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
-    if (f.symmetric && f.coupling < kAutoDominant) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
-    // Symmetric but coupled: a convex QP, where newton's active-set path (one Cholesky per
-    // step, many active-set changes per step) ends in a few steps; Lemke changes one variable
-    // per O(n²) pivot.
-    if (f.symmetric) return {K::kNewton, K::kLemke, K::kPgs, K::kApgd};
+    const bool positive = positiveDiagonal(ctx);
+    if (f.symmetric && f.coupling < kAutoStrongDominant && positive)
+      return {K::kPgs, K::kNewton, K::kLemke, K::kApgd};
+    if (f.symmetric) return {K::kNewton, K::kPgs, K::kLemke, K::kApgd};
+    if (positive && f.gs_bound < 1.0) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
     return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
   }
-  if (pyramidModel(p)) return {K::kPgs, K::kLemke};
-  if (f.body_form) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};  // unbuilt first: no W
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
-  // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
-  // Gauss-Seidel first at any tolerance and size.
-  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
+  const bool loose = p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance;
+  // Loose: Gauss-Seidel's first sweeps are the cheapest progress there is where W is
+  // dominant or sparse (one sweep = one pass over the stored blocks, four orders of
+  // magnitude are a few hundred sweeps); the rate watch hands over to apgd where it
+  // contracts too slowly.
+  if ((loose || (f.sparse && p.tolerance >= kAutoSparseGsTolerance)) && (dominant || f.sparse) &&
+      !f.rank_deficient)
     return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-  if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
-    if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
-  }
+  if (loose) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
   if (f.coupling < kAutoStrongDominant && !f.rank_deficient)
     return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
+  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
+    return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
   if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
@@ -186,18 +238,22 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, const AutoFeatures& f)
 }
 
 // Iterations of a member's first slice, and the residual factor a slice must reach to keep
-// the member running.
+// the member running. The first-order slices are short so that the rate watch can compare
+// members early; they double while the member keeps its place.
 int firstSlice(SolverKind kind) {
   switch (kind) {
     case SolverKind::kNewton: return 300;  // 20 warm-up sweeps, Newton steps and two nlgs bursts
     case SolverKind::kProx: return 300;
-    case SolverKind::kApgd: return 200;
+    case SolverKind::kApgd: return 200;       // each slice restarts its momentum
     case SolverKind::kLemke: return 1 << 30;  // pivoting is not sliced
-    default: return 100;
+    default: return 25;
   }
 }
 double sliceFactor(SolverKind kind) {
   return kind == SolverKind::kNewton || kind == SolverKind::kProx ? 0.1 : 0.5;
+}
+bool firstOrder(SolverKind kind) {
+  return kind == SolverKind::kNlgs || kind == SolverKind::kPgs || kind == SolverKind::kApgd;
 }
 
 // λ onto the contacts' feasible sets (Coulomb cone, λ_n >= 0); other rows unchanged.
@@ -213,72 +269,108 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
   }
 }
 
+// The residual of the start: of λ = 0 without a product with W (d = d_free).
+double startResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  if (!lambda.isZero(0.0)) return ctx.residual(lambda);
+  return naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
+}
+
+bool anyIgnored(const SolveContext& ctx) {
+  return std::find(ctx.ignored.begin(), ctx.ignored.end(), true) != ctx.ignored.end();
+}
+
 }  // namespace
 
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const SolverParams& params = *ctx.params;
-  std::vector<SolverKind> members = autoPlan(ctx, autoFeatures(ctx, ctx.body_dof));
-  Problem assembled;  // the body form's W, assembled only if a member needs it
-  std::vector<int> slice(members.size());
-  for (std::size_t m = 0; m < members.size(); ++m) slice[m] = firstSlice(members[m]);
-  std::vector<double> rate(members.size(), 0.0);  // log residual decrease per second, last slice
-  std::vector<bool> tried(members.size(), false);
-  std::vector<int> retry_origin(members.size(), 0);  // 0 not needed, 1 due, 2 done
-  const Eigen::VectorXd origin = lambda;
-
+  const Clock::time_point portfolio_start = Clock::now();
   KernelReport report;
-  std::vector<std::pair<std::string, double>>* stages = &report.stages;
-  Eigen::VectorXd best = lambda;
   // The measure members are compared by: the disc residual, or for a pyramid the kernels'
   // own pyramid residual (the disc's is nonzero there by design).
   const bool pyramid = pyramidModel(params) && ctx.hasFriction();
   const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
-  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : ctx.residual(lambda);
+  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : startResidual(ctx, lambda);
   if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
   if (by_residual && best_residual <= params.tolerance) {  // the (warm) start is an answer: path "auto"
     report.status = SolveStatus::kConverged;
     report.solver_error = best_residual;
     return report;
   }
+
+  struct Member {
+    SolverKind kind;
+    int slice;
+    double rate = 0.0;  // log residual decrease per second, last slice
+    bool tried = false;
+    int retry_origin = 0;  // 0 not needed, 1 due, 2 done
+  };
+  std::vector<Member> members;
+  for (SolverKind kind : autoPlan(ctx)) members.push_back({kind, firstSlice(kind)});
+  Problem assembled;  // the body form's W, assembled only if a member needs it
+  const Eigen::VectorXd origin = lambda;
+  // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
+  // μ = 0 contact; what the solve returns has none, so that is what is measured.
+  bool needs_zeroing = anyIgnored(ctx);
+  for (std::size_t i = 0; i < ctx.problem->contacts.size() && !needs_zeroing; ++i)
+    needs_zeroing = hasSlidingFriction(ctx.problem->contacts[i].type) && ctx.mu[i] == 0.0;
+  SolverParams member_params = params;
+  SolveContext member = ctx;  // one copy per solve; each slice changes its limits only
+
+  std::vector<std::pair<std::string, double>>* stages = &report.stages;
+  Eigen::VectorXd best = lambda, x, returned_rows;
   double best_error = best_residual;
   FrictionModel best_model = FrictionModel::kCoulombDisc;
   SolveStatus last_failure = SolveStatus::kMaxIterations;
   std::string last_message;
   int used = 0;
+  bool probed = false;         // the rate watch compares the first member with one other
+  double probe_seconds = 0.0;  // > 0: the next slice is a probe, capped at this time
   std::size_t m = 0;
   while (!members.empty()) {
-    const SolverKind kind = members[m];
-    SolverParams member_params = params;
-    member_params.maxIt = std::min(slice[m], params.maxIt - used);
-    SolveContext member = ctx;
+    Member& cur = members[m];
+    member_params.maxIt = std::min(cur.slice, params.maxIt - used);
     member.params = &member_params;
     const Clock::time_point t0 = Clock::now();
+    member.has_deadline = ctx.has_deadline;
+    member.deadline = ctx.deadline;
     if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
       member.deadline = t0 + (ctx.deadline - t0) / 2;
     }
-    if (ctx.problem->bodies && kind != SolverKind::kNlgs && kind != SolverKind::kPgs) {
+    if (probe_seconds > 0.0) {
+      const auto cap =
+          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(probe_seconds));
+      member.deadline = member.has_deadline ? std::min(member.deadline, cap) : cap;
+      member.has_deadline = true;
+      probe_seconds = 0.0;
+    }
+    member.problem = ctx.problem;
+    if (ctx.problem->bodies && cur.kind != SolverKind::kNlgs && cur.kind != SolverKind::kPgs) {
       if (assembled.contacts.empty() && !ctx.problem->contacts.empty())
         assembled = assembledProblem(*ctx.problem);
       member.problem = &assembled;
     }
     // From the best iterate; a member that could not move from it at all runs once more
     // from the portfolio's own start (the warm start), projected onto the feasible sets.
-    const bool from_origin = retry_origin[m] == 1;
-    if (from_origin) retry_origin[m] = 2;
-    Eigen::VectorXd x = from_origin ? origin : best;
+    const bool from_origin = cur.retry_origin == 1;
+    if (from_origin) cur.retry_origin = 2;
+    x = from_origin ? origin : best;
     if (from_origin) projectFeasible(ctx, x);
-    const KernelReport r = runKernel(kind, member, x);
-    // What the solve returns has no force on an ignored contact (minW, maxF): measure that.
-    // A kernel that let one through measured the rest against it (fuzzing: a 1e-18 force
-    // times a W entry of DBL_MAX made a penetrating contact look separated, "converged").
-    const Eigen::VectorXd returned_rows = x;
-    zeroInactiveRows(ctx, x);
-    const bool kernel_measured_x = x == returned_rows;
-    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (stages->empty() || stages->back().first != solverName(kind))
-      stages->emplace_back(solverName(kind), 0.0);
+    const KernelReport r = runKernel(cur.kind, member, x);
+    // A kernel that let a force through on an ignored contact measured the rest against it
+    // (fuzzing: a 1e-18 force times a W entry of DBL_MAX made a penetrating contact look
+    // separated, "converged"): then its own measure does not count.
+    bool kernel_measured_x = true;
+    if (needs_zeroing) {
+      returned_rows = x;
+      zeroInactiveRows(ctx, x);
+      kernel_measured_x = x == returned_rows;
+    }
+    const Clock::time_point t1 = Clock::now();
+    const double seconds = std::chrono::duration<double>(t1 - t0).count();
+    if (stages->empty() || stages->back().first != solverName(cur.kind))
+      stages->emplace_back(solverName(cur.kind), 0.0);
     stages->back().second += seconds;
-    report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    if (!r.history.empty()) report.history.insert(report.history.end(), r.history.begin(), r.history.end());
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
@@ -293,7 +385,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         r.status == SolveStatus::kConverged && (!by_residual || residual <= params.tolerance);
     if (residual < best_residual || converged) {
       best_residual = residual;
-      best = x;
+      best.swap(x);
       best_error = r.solver_error;
       best_model = r.friction_model;
     }
@@ -315,37 +407,63 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
       last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
-      last_message = std::string(solverName(kind)) + ": " + r.message;
+      last_message = std::string(solverName(cur.kind)) + ": " + r.message;
       members.erase(members.begin() + static_cast<long>(m));
-      slice.erase(slice.begin() + static_cast<long>(m));
-      rate.erase(rate.begin() + static_cast<long>(m));
-      tried.erase(tried.begin() + static_cast<long>(m));
-      retry_origin.erase(retry_origin.begin() + static_cast<long>(m));
       if (m >= members.size()) m = 0;
       continue;
     }
     // Slice used up (iterations or its share of the time): keep the member while it
     // progresses, otherwise the next one continues from the best iterate.
-    const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(kind) * start_residual;
-    rate[m] = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
-    tried[m] = true;
-    if (retry_origin[m] == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin)
-      retry_origin[m] = 1;
+    const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(cur.kind) * start_residual;
+    cur.rate = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
+    const bool was_probe = probed && cur.tried == false;
+    cur.tried = true;
+    if (cur.retry_origin == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin)
+      cur.retry_origin = 1;
+    std::size_t untried = members.size();
+    for (std::size_t k = 1; k < members.size() && untried == members.size(); ++k)
+      if (!members[(m + k) % members.size()].tried) untried = (m + k) % members.size();
+    if (was_probe) {
+      // The probe ran as long as the member before it: go on with whichever lowered the
+      // residual faster per second.
+      std::size_t fastest = m;
+      for (std::size_t k = 0; k < members.size(); ++k)
+        if (members[k].tried && members[k].rate > members[fastest].rate) fastest = k;
+      if (fastest != m || progressing) {
+        members[fastest].slice = std::min(2 * members[fastest].slice, 1 << 28);
+        m = fastest;
+        continue;
+      }
+    }
     if (progressing) {
-      slice[m] = std::min(2 * slice[m], 1 << 28);
+      // The rate watch: a first-order member that progresses, but at its rate would still
+      // need more than kProbeRatio times what the solve has spent so far, lets the next
+      // member try once for as long as its own last slice took.
+      const double elapsed = std::chrono::duration<double>(t1 - portfolio_start).count();
+      const double projected = by_residual && cur.rate > 0.0
+                                   ? std::log(best_residual / params.tolerance) / cur.rate
+                                   : std::numeric_limits<double>::infinity();
+      // Only between first-order members (whose rates over equal times compare), and not on
+      // the body form, whose point is that W is never formed.
+      if (!probed && firstOrder(cur.kind) && untried < members.size() && firstOrder(members[untried].kind) &&
+          !ctx.problem->bodies && !pyramid && projected > kProbeRatio * elapsed) {
+        probed = true;
+        probe_seconds = seconds;
+        m = untried;
+        continue;
+      }
+      cur.slice = std::min(2 * cur.slice, 1 << 28);
       continue;
     }
     // Stalled: the next member not tried yet, else the one that lowered the residual
     // fastest for its time (a stalled member keeps its slice; the chosen one doubles it).
     if (members.size() > 1) {
-      std::size_t next = members.size();
-      for (std::size_t k = 1; k < members.size() && next == members.size(); ++k)
-        if (!tried[(m + k) % members.size()]) next = (m + k) % members.size();
+      std::size_t next = untried;
       if (next == members.size()) {
         next = (m + 1) % members.size();
         for (std::size_t k = 0; k < members.size(); ++k)
-          if (rate[k] > rate[next]) next = k;
-        slice[next] = std::min(2 * slice[next], 1 << 28);
+          if (members[k].rate > members[next].rate) next = k;
+        members[next].slice = std::min(2 * members[next].slice, 1 << 28);
       }
       m = next;
     }

@@ -240,6 +240,42 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   EXPECT_EQ(s.solver.rfind("auto:lemke", 0), 0u) << s.solver;
 }
 
+// A non-symmetric W with a positive, dominant diagonal (an H-matrix): projected Gauss-Seidel
+// converges there, so auto starts with it; a single contact is its own local solve.
+TEST(Portfolio, DominantLcpStartsWithGaussSeidelAndOneContactSkipsTheFeatures) {
+  Problem lcp;
+  Eigen::Matrix3d W;
+  W << 2.0, 0.5, 0.3, -0.2, 1.5, 0.4, 0.6, 0.1, 3.0;
+  lcp.W = Eigen::MatrixXd(W);
+  lcp.d_free = Eigen::Vector3d(-1.0, 0.5, -2.0);
+  for (int i = 0; i < 3; ++i) {
+    Contact c;
+    c.id = i;
+    c.type = ContactType::kFrictionless;
+    c.rows = 1;
+    lcp.contacts.push_back(c);
+  }
+  const SolveResult r = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 1000));
+  EXPECT_EQ(r.solver.rfind("auto:pgs", 0), 0u) << r.solver;
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_LE(recomputedResidual(lcp, r), 1e-10);
+  // The same W with one side of the dominance lost (row 0: |0.5| + |2.5| > 2): Lemke first.
+  W(0, 2) = 2.5;
+  lcp.W = Eigen::MatrixXd(W);
+  const SolveResult s = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 1000));
+  EXPECT_EQ(s.solver.rfind("auto:lemke", 0), 0u) << s.solver;
+  EXPECT_LE(recomputedResidual(lcp, s), 1e-10);
+
+  World w;
+  w.add(hard::box(1.0, Eigen::Vector3d(1.0, 1.0, 1.0), Eigen::Vector3d(0.0, 0.0, 0.5)));
+  w.contact(0, -1, Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d::UnitZ(), 0.5);
+  const Problem one = w.problem();
+  const SolveResult o = solveProblem(one, params(SolverKind::kAuto, 1e-10, 1000));
+  EXPECT_EQ(o.solver, "auto:nlgs");
+  ASSERT_TRUE(o.converged) << o.message;
+  EXPECT_LE(recomputedResidual(one, o), 1e-10);
+}
+
 TEST(Portfolio, ProxIsANamedSolver) {
   SolverKind kind;
   ASSERT_TRUE(parseSolverName("prox", &kind));
