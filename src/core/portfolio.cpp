@@ -53,12 +53,7 @@ constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start 
 // below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;
-constexpr double kAutoSparseGsTolerance = 1e-4;  // block-sparse W: Gauss-Seidel first down to this
-constexpr double kAutoStrongDominant = 0.25;     // a Jacobi bound of 4x per sweep: nlgs at any tolerance
-// The rate watch: a first-order member whose projected time to the tolerance is above this
-// multiple of the time spent lets the next member try once (its cost is then at most 1/ratio
-// of the rest of the solve when the first member was the right one).
-constexpr double kProbeRatio = 1.0;
+constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
 
 struct AutoFeatures {
   int rows = 0;
@@ -215,20 +210,17 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
     return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
   }
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
-  const bool loose = p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance;
-  // Loose: Gauss-Seidel's first sweeps are the cheapest progress there is where W is
-  // dominant or sparse (one sweep = one pass over the stored blocks, four orders of
-  // magnitude are a few hundred sweeps); the rate watch hands over to apgd where it
-  // contracts too slowly.
-  if ((loose || (f.sparse && p.tolerance >= kAutoSparseGsTolerance)) && (dominant || f.sparse) &&
-      !f.rank_deficient)
+  // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
+  // Gauss-Seidel first at any tolerance and size.
+  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
     return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-  if (loose) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  if (p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoTightTolerance) {
+    if (dominant && f.rows <= kAutoSmallRows) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+    return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+  }
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
   if (f.coupling < kAutoStrongDominant && !f.rank_deficient)
     return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
-  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
-    return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
   if (f.sparse && f.rows > kAutoNewtonRows) return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
@@ -238,22 +230,18 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
 }
 
 // Iterations of a member's first slice, and the residual factor a slice must reach to keep
-// the member running. The first-order slices are short so that the rate watch can compare
-// members early; they double while the member keeps its place.
+// the member running; a slice doubles while the member keeps its place.
 int firstSlice(SolverKind kind) {
   switch (kind) {
     case SolverKind::kNewton: return 300;  // 20 warm-up sweeps, Newton steps and two nlgs bursts
     case SolverKind::kProx: return 300;
     case SolverKind::kApgd: return 200;       // each slice restarts its momentum
     case SolverKind::kLemke: return 1 << 30;  // pivoting is not sliced
-    default: return 25;
+    default: return 100;
   }
 }
 double sliceFactor(SolverKind kind) {
   return kind == SolverKind::kNewton || kind == SolverKind::kProx ? 0.1 : 0.5;
-}
-bool firstOrder(SolverKind kind) {
-  return kind == SolverKind::kNlgs || kind == SolverKind::kPgs || kind == SolverKind::kApgd;
 }
 
 // λ onto the contacts' feasible sets (Coulomb cone, λ_n >= 0); other rows unchanged.
@@ -283,7 +271,6 @@ bool anyIgnored(const SolveContext& ctx) {
 
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const SolverParams& params = *ctx.params;
-  const Clock::time_point portfolio_start = Clock::now();
   KernelReport report;
   // The measure members are compared by: the disc residual, or for a pyramid the kernels'
   // own pyramid residual (the disc's is nonzero there by design).
@@ -323,8 +310,6 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   SolveStatus last_failure = SolveStatus::kMaxIterations;
   std::string last_message;
   int used = 0;
-  bool probed = false;         // the rate watch compares the first member with one other
-  double probe_seconds = 0.0;  // > 0: the next slice is a probe, capped at this time
   std::size_t m = 0;
   while (!members.empty()) {
     Member& cur = members[m];
@@ -335,13 +320,6 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     member.deadline = ctx.deadline;
     if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
       member.deadline = t0 + (ctx.deadline - t0) / 2;
-    }
-    if (probe_seconds > 0.0) {
-      const auto cap =
-          t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(probe_seconds));
-      member.deadline = member.has_deadline ? std::min(member.deadline, cap) : cap;
-      member.has_deadline = true;
-      probe_seconds = 0.0;
     }
     member.problem = ctx.problem;
     if (ctx.problem->bodies && cur.kind != SolverKind::kNlgs && cur.kind != SolverKind::kPgs) {
@@ -365,8 +343,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       zeroInactiveRows(ctx, x);
       kernel_measured_x = x == returned_rows;
     }
-    const Clock::time_point t1 = Clock::now();
-    const double seconds = std::chrono::duration<double>(t1 - t0).count();
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     if (stages->empty() || stages->back().first != solverName(cur.kind))
       stages->emplace_back(solverName(cur.kind), 0.0);
     stages->back().second += seconds;
@@ -416,42 +393,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // progresses, otherwise the next one continues from the best iterate.
     const bool progressing = r.iterations > 0 && best_residual <= sliceFactor(cur.kind) * start_residual;
     cur.rate = std::log(start_residual / std::max(best_residual, 1e-300)) / std::max(seconds, 1e-9);
-    const bool was_probe = probed && cur.tried == false;
     cur.tried = true;
     if (cur.retry_origin == 0 && r.iterations > 0 && !(residual < start_residual) && !from_origin)
       cur.retry_origin = 1;
     std::size_t untried = members.size();
     for (std::size_t k = 1; k < members.size() && untried == members.size(); ++k)
       if (!members[(m + k) % members.size()].tried) untried = (m + k) % members.size();
-    if (was_probe) {
-      // The probe ran as long as the member before it: go on with whichever lowered the
-      // residual faster per second.
-      std::size_t fastest = m;
-      for (std::size_t k = 0; k < members.size(); ++k)
-        if (members[k].tried && members[k].rate > members[fastest].rate) fastest = k;
-      if (fastest != m || progressing) {
-        members[fastest].slice = std::min(2 * members[fastest].slice, 1 << 28);
-        m = fastest;
-        continue;
-      }
-    }
     if (progressing) {
-      // The rate watch: a first-order member that progresses, but at its rate would still
-      // need more than kProbeRatio times what the solve has spent so far, lets the next
-      // member try once for as long as its own last slice took.
-      const double elapsed = std::chrono::duration<double>(t1 - portfolio_start).count();
-      const double projected = by_residual && cur.rate > 0.0
-                                   ? std::log(best_residual / params.tolerance) / cur.rate
-                                   : std::numeric_limits<double>::infinity();
-      // Only between first-order members (whose rates over equal times compare), and not on
-      // the body form, whose point is that W is never formed.
-      if (!probed && firstOrder(cur.kind) && untried < members.size() && firstOrder(members[untried].kind) &&
-          !ctx.problem->bodies && !pyramid && projected > kProbeRatio * elapsed) {
-        probed = true;
-        probe_seconds = seconds;
-        m = untried;
-        continue;
-      }
       cur.slice = std::min(2 * cur.slice, 1 << 28);
       continue;
     }
