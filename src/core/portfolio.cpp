@@ -23,10 +23,11 @@ using Clock = std::chrono::steady_clock;
 // Seidel and APGD converge linearly or sublinearly, Newton superlinearly), the size (a
 // Newton step factorizes, a sweep or an APGD iteration is one pass over W), the storage
 // (body form: Gauss-Seidel runs unbuilt; block-sparse: a Newton step is a sparse LU), for
-// LCPs W's symmetry (pgs converges for symmetric W, Lemke does not need it), and two
-// estimates of how hard W is for Gauss-Seidel: the normal coupling κ (mean over contacts of
-// Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is diagonally dominant on the normal rows) and rank
-// deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
+// LCPs W's symmetry (a convex QP: newton's active-set path) and Gauss-Seidel's contraction
+// bound (a non-symmetric W where pgs provably converges), the number of contacts (one is
+// Gauss-Seidel's own local solve), and two estimates of how hard W is for Gauss-Seidel: the
+// normal coupling κ (mean over contacts of Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is
+// diagonally dominant on the normal rows) and rank deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
 // quarter of the contacts with a nearly parallel partner). The start is measured first: a
 // warm start that already meets the tolerance runs no member.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
