@@ -93,18 +93,23 @@ double normalDiagonal(const SolveContext& ctx, int i) {
   return w;
 }
 
-Coupling normalCoupling(const SolveContext& ctx) {
+// `redundancy`: also the share of nearly parallel normals (only the frictional plan reads it).
+Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
-  std::vector<double> diag(nc, 0.0), off_sum(nc, 0.0), lower_sum(nc, 0.0);
-  std::vector<bool> redundant(nc, false);
+  std::vector<double> scratch(3 * static_cast<std::size_t>(nc), 0.0);  // one allocation
+  double* diag = scratch.data();
+  double* off_sum = diag + nc;
+  double* lower_sum = off_sum + nc;
+  std::vector<char> redundant(redundancy ? nc : 0, 0);
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
   for (int i = 0; i < nc; ++i) diag[i] = normalDiagonal(ctx, i);
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (j < i) lower_sum[i] += std::abs(w);
-    if (diag[i] > 0.0 && diag[j] > 0.0 && std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j]))
-      redundant[i] = true;
+    if (redundancy && diag[i] > 0.0 && diag[j] > 0.0 &&
+        std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j]))
+      redundant[i] = 1;
   };
   if (dense) {
     for (int j = 0; j < nc; ++j) {
@@ -129,7 +134,7 @@ Coupling normalCoupling(const SolveContext& ctx) {
     const double pivot = diag[i] - lower_sum[i];
     gs_bound = std::max(gs_bound, pivot > 0.0 ? (off_sum[i] - lower_sum[i]) / pivot
                                               : std::numeric_limits<double>::infinity());
-    repeated += redundant[i] ? 1 : 0;
+    repeated += redundancy && redundant[i] ? 1 : 0;
     ++active;
   }
   Coupling c;
@@ -141,18 +146,18 @@ Coupling normalCoupling(const SolveContext& ctx) {
   return c;
 }
 
-AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof) {
+AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
   if (!f.body_form) {
-    const Coupling c = normalCoupling(ctx);
+    const Coupling c = normalCoupling(ctx, friction);
     f.coupling = c.kappa;
     f.gs_bound = c.gs_bound;
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
-  if (!ctx.hasFriction() && !f.body_form && f.rows <= kAutoLemkeRows) {
+  if (!friction && !f.body_form && f.rows <= kAutoLemkeRows) {
     f.symmetric = isSymmetric(ctx.problem->W, 1e-12);
   }
   if (body_dof > 0) {
@@ -194,7 +199,7 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
   if (ctx.problem->bodies)  // unbuilt first: no W
     return friction ? std::vector<K>{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
                     : std::vector<K>{K::kPgs, K::kNewton, K::kApgd};
-  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof);
+  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof, friction);
   if (!friction) {
     // An LCP. Symmetric W (a convex QP): newton's active-set path ends in a few Cholesky
     // steps whatever the coupling; projected Gauss-Seidel only where W is so diagonally
@@ -270,6 +275,14 @@ bool anyIgnored(const SolveContext& ctx) {
 
 }  // namespace
 
+// What one solve's portfolio needs besides its report, kept per thread (islands run on a
+// pool) so that a microsecond island pays no allocation for it after the first solve: the
+// member context (its vectors assigned in place), the iterates and the members.
+struct Workspace {
+  SolveContext member;
+  Eigen::VectorXd best, x, returned_rows;
+};
+
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const SolverParams& params = *ctx.params;
   KernelReport report;
@@ -294,18 +307,23 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   };
   std::vector<Member> members;
   for (SolverKind kind : autoPlan(ctx)) members.push_back({kind, firstSlice(kind)});
-  Problem assembled;  // the body form's W, assembled only if a member needs it
-  const Eigen::VectorXd origin = lambda;
+  Problem assembled;                       // the body form's W, assembled only if a member needs it
+  const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
   // μ = 0 contact; what the solve returns has none, so that is what is measured.
   bool needs_zeroing = anyIgnored(ctx);
   for (std::size_t i = 0; i < ctx.problem->contacts.size() && !needs_zeroing; ++i)
     needs_zeroing = hasSlidingFriction(ctx.problem->contacts[i].type) && ctx.mu[i] == 0.0;
   SolverParams member_params = params;
-  SolveContext member = ctx;  // one copy per solve; each slice changes its limits only
+  thread_local Workspace work;
+  SolveContext& member = work.member;
+  member = ctx;  // each slice changes its limits only
+  Eigen::VectorXd& best = work.best;
+  Eigen::VectorXd& x = work.x;
+  Eigen::VectorXd& returned_rows = work.returned_rows;
+  best = lambda;
 
   std::vector<std::pair<std::string, double>>* stages = &report.stages;
-  Eigen::VectorXd best = lambda, x, returned_rows;
   double best_error = best_residual;
   FrictionModel best_model = FrictionModel::kCoulombDisc;
   SolveStatus last_failure = SolveStatus::kMaxIterations;
