@@ -158,7 +158,11 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
   if (!friction && !f.body_form && f.rows <= kAutoLemkeRows) {
-    f.symmetric = isSymmetric(ctx.problem->W, 1e-12);
+    // A block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed
+    // symmetric: comparing every island's blocks cost as much as newton's whole solve on
+    // MuJoCo's steps, and newton tests the symmetry itself before its active-set path (a
+    // non-symmetric W gets its general semismooth path, then Lemke on a stall).
+    f.symmetric = f.sparse || isSymmetric(ctx.problem->W, 1e-12);
   }
   if (body_dof > 0) {
     int active_rows = 0;
