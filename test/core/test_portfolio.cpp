@@ -276,6 +276,39 @@ TEST(Portfolio, DominantLcpStartsWithGaussSeidelAndOneContactSkipsTheFeatures) {
   EXPECT_LE(recomputedResidual(one, o), 1e-10);
 }
 
+// A block-sparse LCP W is presumed symmetric (assembled J M⁻¹ Jᵀ) and goes to newton first,
+// which tests the symmetry itself: a non-symmetric, coupled one must still be solved.
+TEST(Portfolio, NonSymmetricBlockSparseLcpIsStillSolved) {
+  Eigen::MatrixXd W(4, 4);
+  W << 1.0, 0.9, 0.0, 0.4, -0.6, 1.0, 0.7, 0.0, 0.0, 0.2, 1.0, 0.8, 0.5, 0.0, -0.9, 1.0;
+  Problem lcp;
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes({1, 1, 1, 1});
+  for (int i = 0; i < 4; ++i) {
+    B.beginRow();
+    for (int j = 0; j < 4; ++j)
+      if (W(i, j) != 0.0) B.addBlock(j, W.block(i, j, 1, 1));
+  }
+  lcp.W = B;
+  lcp.d_free = Eigen::Vector4d(-1.0, -0.5, 0.3, -2.0);
+  for (int i = 0; i < 4; ++i) {
+    Contact c;
+    c.id = i;
+    c.type = ContactType::kFrictionless;
+    c.rows = 1;
+    lcp.contacts.push_back(c);
+  }
+  const SolveResult r = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 10000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver.rfind("auto:newton", 0), 0u) << r.solver;
+  EXPECT_LE(recomputedResidual(lcp, r), 1e-10);
+  // The same problem dense is compared, so it goes to Lemke (W is not dominant enough for pgs).
+  lcp.W = W;
+  const SolveResult d = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 10000));
+  ASSERT_TRUE(d.converged) << d.solver << ": " << d.message;
+  EXPECT_EQ(d.solver.rfind("auto:lemke", 0), 0u) << d.solver;
+  EXPECT_LE(recomputedResidual(lcp, d), 1e-10);
+}
+
 TEST(Portfolio, ProxIsANamedSolver) {
   SolverKind kind;
   ASSERT_TRUE(parseSolverName("prox", &kind));
