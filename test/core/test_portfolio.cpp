@@ -51,6 +51,21 @@ double recomputedResidual(const Problem& p, const SolveResult& r) {
   return naturalMapResidual(p, effectiveMu(p, SolverParams().mu), r.forces, d);
 }
 
+// An LCP: one frictionless contact per row of W.
+Problem frictionlessLcp(const Eigen::MatrixXd& W, const Eigen::VectorXd& d_free) {
+  Problem p;
+  p.W = W;
+  p.d_free = d_free;
+  for (int i = 0; i < W.rows(); ++i) {
+    Contact c;
+    c.id = i;
+    c.type = ContactType::kFrictionless;
+    c.rows = 1;
+    p.contacts.push_back(c);
+  }
+  return p;
+}
+
 // The reported path and stages agree: "auto:" + the stage names joined by "->".
 void expectPath(const SolveResult& r) {
   ASSERT_FALSE(r.stages.empty()) << r.solver;  // "auto" alone only when the start was an answer
@@ -243,18 +258,9 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
 // A non-symmetric W with a positive, dominant diagonal (an H-matrix): projected Gauss-Seidel
 // converges there, so auto starts with it; a single contact is its own local solve.
 TEST(Portfolio, DominantLcpStartsWithGaussSeidelAndOneContactSkipsTheFeatures) {
-  Problem lcp;
   Eigen::Matrix3d W;
   W << 2.0, 0.5, 0.3, -0.2, 1.5, 0.4, 0.6, 0.1, 3.0;
-  lcp.W = Eigen::MatrixXd(W);
-  lcp.d_free = Eigen::Vector3d(-1.0, 0.5, -2.0);
-  for (int i = 0; i < 3; ++i) {
-    Contact c;
-    c.id = i;
-    c.type = ContactType::kFrictionless;
-    c.rows = 1;
-    lcp.contacts.push_back(c);
-  }
+  Problem lcp = frictionlessLcp(W, Eigen::Vector3d(-1.0, 0.5, -2.0));
   const SolveResult r = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 1000));
   EXPECT_EQ(r.solver.rfind("auto:pgs", 0), 0u) << r.solver;
   ASSERT_TRUE(r.converged) << r.message;
@@ -281,7 +287,7 @@ TEST(Portfolio, DominantLcpStartsWithGaussSeidelAndOneContactSkipsTheFeatures) {
 TEST(Portfolio, NonSymmetricBlockSparseLcpIsStillSolved) {
   Eigen::MatrixXd W(4, 4);
   W << 1.0, 0.9, 0.0, 0.4, -0.6, 1.0, 0.7, 0.0, 0.0, 0.2, 1.0, 0.8, 0.5, 0.0, -0.9, 1.0;
-  Problem lcp;
+  Problem lcp = frictionlessLcp(W, Eigen::Vector4d(-1.0, -0.5, 0.3, -2.0));
   BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes({1, 1, 1, 1});
   for (int i = 0; i < 4; ++i) {
     B.beginRow();
@@ -289,14 +295,6 @@ TEST(Portfolio, NonSymmetricBlockSparseLcpIsStillSolved) {
       if (W(i, j) != 0.0) B.addBlock(j, W.block(i, j, 1, 1));
   }
   lcp.W = B;
-  lcp.d_free = Eigen::Vector4d(-1.0, -0.5, 0.3, -2.0);
-  for (int i = 0; i < 4; ++i) {
-    Contact c;
-    c.id = i;
-    c.type = ContactType::kFrictionless;
-    c.rows = 1;
-    lcp.contacts.push_back(c);
-  }
   const SolveResult r = solveProblem(lcp, params(SolverKind::kAuto, 1e-10, 10000));
   ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
   EXPECT_EQ(r.solver.rfind("auto:newton", 0), 0u) << r.solver;
