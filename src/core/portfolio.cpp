@@ -27,8 +27,9 @@ using Clock = std::chrono::steady_clock;
 // bound (a non-symmetric W where pgs provably converges), the number of contacts (one is
 // Gauss-Seidel's own local solve), and two estimates of how hard W is for Gauss-Seidel: the
 // normal coupling κ (mean over contacts of Σ_j≠i |W_nn,ij| / W_nn,ii; below 1 W is
-// diagonally dominant on the normal rows) and rank deficiency (active rows above the bodies' 6 DoF each when the body form is known, else a
-// quarter of the contacts with a nearly parallel partner). The start is measured first: a
+// diagonally dominant on the normal rows) and rank deficiency (active rows above the bodies'
+// 6 DoF each when the body form is known, else a quarter of the contacts with a nearly
+// parallel partner). The start is measured first: a
 // warm start that already meets the tolerance runs no member.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
@@ -281,7 +282,7 @@ bool anyIgnored(const SolveContext& ctx) {
 
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
 // pool) so that a microsecond island pays no allocation for it after the first solve: the
-// member context (its vectors assigned in place), the iterates and the members.
+// member context (its vectors assigned in place) and the iterates.
 struct Workspace {
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
