@@ -59,12 +59,13 @@ constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep:
 
 struct AutoFeatures {
   int rows = 0;
-  double coupling = 0.0;        // mean normal off-diagonal / diagonal ratio
-  double gs_bound = 0.0;        // Gauss-Seidel's contraction bound (Coupling::gs_bound)
-  bool rank_deficient = false;  // active rows > 6 × bodies, or redundant contacts (below)
-  bool body_form = false;       // unbuilt: ctx.problem carries the bodies, no W
-  bool sparse = false;          // block-sparse W
-  bool symmetric = false;       // W = Wᵀ (to round-off); computed for LCPs only
+  double coupling = 0.0;           // mean normal off-diagonal / diagonal ratio
+  double gs_bound = 0.0;           // Gauss-Seidel's contraction bound (Coupling::gs_bound)
+  bool positive_diagonal = false;  // Coupling::positive_diagonal
+  bool rank_deficient = false;     // active rows > 6 × bodies, or redundant contacts (below)
+  bool body_form = false;          // unbuilt: ctx.problem carries the bodies, no W
+  bool sparse = false;             // block-sparse W
+  bool symmetric = false;          // W = Wᵀ (to round-off); computed for LCPs only
 };
 
 // The normal coupling κ (above) and the fraction of contacts whose normal row is nearly
@@ -77,6 +78,7 @@ struct Coupling {
   // positive: the ∞-norm bound on Gauss-Seidel's iteration matrix (D + L)⁻¹U; below 1 a sweep
   // contracts (a strictly dominant W, and a triangular one, where one sweep is exact).
   double gs_bound = 0.0;
+  bool positive_diagonal = true;  // W_nn + r > 0 on every active contact: Gauss-Seidel can start
   double redundant = 0.0;
 };
 
@@ -129,6 +131,9 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   }
   double sum = 0.0, gs_bound = 0.0;
   int active = 0, repeated = 0;
+  bool positive = true;
+  for (int i = 0; i < nc; ++i)
+    if (!ctx.ignored[i] && !(diag[i] + ctx.regularization > 0.0)) positive = false;
   for (int i = 0; i < nc; ++i) {
     if (ctx.ignored[i] || diag[i] <= 0.0) continue;  // no diagonal: Gauss-Seidel cannot use the row
     sum += off_sum[i] / diag[i];
@@ -139,6 +144,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
     ++active;
   }
   Coupling c;
+  c.positive_diagonal = positive;
   if (active > 0) {
     c.kappa = sum / active;
     c.gs_bound = gs_bound;
@@ -155,6 +161,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
     const Coupling c = normalCoupling(ctx, friction);
     f.coupling = c.kappa;
     f.gs_bound = c.gs_bound;
+    f.positive_diagonal = c.positive_diagonal;
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
   }
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
@@ -213,7 +220,7 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
     // strictly dominant or a triangular W); otherwise Lemke's pivoting is exact and, up to a dense
     // tableau of kAutoLemkeRows, cheap.
     if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
-    const bool positive = positiveDiagonal(ctx);
+    const bool positive = f.positive_diagonal;
     if (f.symmetric && f.coupling < kAutoStrongDominant && positive)
       return {K::kPgs, K::kNewton, K::kLemke, K::kApgd};
     if (f.symmetric) return {K::kNewton, K::kPgs, K::kLemke, K::kApgd};
