@@ -31,7 +31,8 @@
 // are right but can crawl while they change. So it starts from 20 nlgs sweeps (or
 // residual 1e-3), and whenever 10 Newton steps fail to halve the residual, up to 100
 // nlgs sweeps from the best iterate (or a tenfold decrease) move the states on before
-// Newton resumes. Iterations count Newton steps plus nlgs sweeps.
+// Newton resumes. A warm-started solve that stalls a second time restarts once from
+// λ = 0. Iterations count Newton steps plus nlgs sweeps.
 //
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
@@ -76,6 +77,8 @@ constexpr int kStallWindow = 10;
 constexpr double kStallFactor = 0.5;
 constexpr int kBurstSweeps = 100;
 constexpr double kBurstReduction = 0.1;
+// A warm-started solve that stalls this often restarts once from λ = 0.
+constexpr int kStallsBeforeColdStart = 2;
 
 enum class RowKind : std::uint8_t { kIdentity, kNormal, kFrictional, kFrictionalNormalOnly, kBilateral };
 
@@ -406,6 +409,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   int sweeps = warm_sweeps;
   bool nlgs_usable =
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
+  const bool warm_started = start.squaredNorm() > 0.0;
+  int stalls = 0;
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   SolverParams burst_params = warm_params;
@@ -443,7 +448,23 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (since_checkpoint == 0) checkpoint_residual = residual;
     if (since_checkpoint >= kStallWindow) {
       since_checkpoint = 0;
-      if (residual > kStallFactor * checkpoint_residual && nlgs_usable) {
+      const bool stalled = residual > kStallFactor * checkpoint_residual;
+      stalls += stalled ? 1 : 0;
+      if (stalled && stalls == kStallsBeforeColdStart && warm_started) {
+        // A warm start that still stalls after a burst is dropped: on a rank-deficient W
+        // the previous forces can carry internal (null-space) forces that leave the
+        // linearisation badly conditioned; the cold start does not (best is kept).
+        lambda.setZero();
+        if (nlgs_usable) {
+          burst_params.tolerance = warm_params.tolerance;
+          burst_params.maxIt = std::min(kWarmupSweeps, params.maxIt - newton_steps - sweeps);
+          sweeps += runNonlinearGaussSeidel(burst_ctx, lambda).iterations;
+          if (!lambda.allFinite()) lambda.setZero();
+        }
+        c_reg = kRegularizationStart;
+        continue;
+      }
+      if (stalled && nlgs_usable) {
         lambda = best;
         burst_params.tolerance = std::max(params.tolerance, kBurstReduction * best_residual);
         burst_params.maxIt = std::min(kBurstSweeps, params.maxIt - newton_steps - sweeps);
