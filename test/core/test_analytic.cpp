@@ -2,6 +2,7 @@
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/residual.h"
 
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -89,6 +90,39 @@ TEST(Analytic, SlidingWithCoupledAnisotropicBlockStillOpposesSlip) {
   EXPECT_NEAR(force.norm(), 0.3 * r.forces[0], 1e-12);
   EXPECT_NEAR(force.normalized().dot(slip.normalized()), -1.0, 1e-10);
   EXPECT_EQ(r.states[0], ContactState::kSlip);
+}
+
+TEST(Analytic, OneContactWithAnyBlockIsSolvedExactlyInOneSweep) {
+  // With one contact, a Gauss-Seidel sweep is one local solve: if that solve is exact the
+  // first sweep lands on the solution, for coupled and for non-symmetric blocks (assembled
+  // W often carries round-off asymmetry). Each answer is checked against Coulomb's law.
+  std::srand(11);
+  int sliding = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Matrix3d J = Eigen::Matrix3d::Random();
+    Eigen::Matrix3d W = J * J.transpose() + 0.3 * Eigen::Matrix3d::Identity();
+    if (trial % 2 == 1) W += 0.05 * W.norm() * Eigen::Matrix3d::Random();  // non-symmetric
+    if (W.determinant() <= 0.0 || W(0, 0) <= 0.0) continue;
+    const Eigen::Vector3d d_free(-0.5 - std::abs(Eigen::Vector3d::Random()[0]), Eigen::Vector3d::Random()[1],
+                                 Eigen::Vector3d::Random()[2]);
+    const double mu = 0.2 + 0.4 * std::abs(Eigen::Vector3d::Random()[0]);
+    SolverParams params = tight(SolverKind::kNlgs);
+    params.maxIt = 2;  // the second sweep only confirms the first
+    const SolveResult r = solveProblem(oneFrictionalContact(W, d_free, mu), params);
+    ASSERT_EQ(r.status, SolveStatus::kConverged) << "trial " << trial << ": " << r.message;
+    const double scale = d_free.norm();
+    ASSERT_GT(r.forces[0], 0.0) << "trial " << trial;
+    EXPECT_NEAR(r.d[0], 0.0, 1e-12 * scale) << "trial " << trial;
+    const Eigen::Vector2d force(r.forces[1], r.forces[2]);
+    const Eigen::Vector2d slip(r.d[1], r.d[2]);
+    EXPECT_LE(force.norm(), mu * r.forces[0] * (1 + 1e-12)) << "trial " << trial;
+    if (slip.norm() > 1e-10 * scale) {
+      ++sliding;
+      EXPECT_NEAR(force.norm(), mu * r.forces[0], 1e-12 * scale) << "trial " << trial;
+      EXPECT_NEAR(force.normalized().dot(slip.normalized()), -1.0, 1e-10) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(sliding, 40);  // not only sticking contacts
 }
 
 TEST(Analytic, SeparatingContactHasZeroForce) {

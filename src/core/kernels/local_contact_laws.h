@@ -136,33 +136,79 @@ inline void coulombTangentStep(const LocalBlock& blk, const Eigen::Vector2d& bt,
   }
 }
 
+// Sliding solution of the local Coulomb problem for any 3×3 block D (coupled normal and
+// tangents, or a tangential block that round-off left non-symmetric). Sliding means
+// u_n = 0 and λ = λ_n (1, μ s) with s = (cos θ, sin θ), so
+//   λ_n(θ) = -b_n / g(θ),        g(θ) = D_nn + μ D_nt·s   (λ_n > 0: b_n < 0 and g > 0),
+//   u_t(θ) = λ_n(θ) v(θ) + b_t,  v(θ) = D_tn + μ D_tt s,
+// and Coulomb's law asks the slip to oppose the force: f(θ) = s⊥·u_t(θ) = 0 with
+// s·u_t(θ) <= 0, s⊥ = (-sin θ, cos θ). One unknown instead of three: Newton on θ with
+//   f'(θ) = -s·u_t + s⊥·(λ_n' v + λ_n μ D_tt s⊥),   λ_n' = -λ_n μ (D_nt·s⊥) / g,
+// quadratic near a simple root, where the alternation below converges only linearly (10+
+// rounds when D couples normal and tangents, and never exactly for a non-symmetric D_tt).
+// Returns false, leaving λ alone, unless it lands on a root that satisfies the law.
+inline bool slidingLocalSolve(const Eigen::Matrix3d& D, double mu, const Eigen::Vector3d& b, double theta,
+                              Eigen::Vector3d& lambda) {
+  if (!(b[0] < 0.0)) return false;
+  const Eigen::Vector2d d_nt = D.block<1, 2>(0, 1).transpose();
+  const Eigen::Vector2d d_tn = D.block<2, 1>(1, 0);
+  const Eigen::Matrix2d d_tt = D.block<2, 2>(1, 1);
+  const double scale = std::abs(b[1]) + std::abs(b[2]) + std::abs(b[0]) * (d_tn.cwiseAbs().sum() + mu * d_tt.cwiseAbs().sum()) /
+                                                           std::abs(D(0, 0));
+  for (int it = 0; it < 16; ++it) {
+    const Eigen::Vector2d s(std::cos(theta), std::sin(theta));
+    const Eigen::Vector2d s_perp(-s[1], s[0]);
+    const double g = D(0, 0) + mu * d_nt.dot(s);
+    if (!(g > 0.0)) return false;
+    const double normal = -b[0] / g;
+    const Eigen::Vector2d v = d_tn + mu * (d_tt * s);
+    const Eigen::Vector2d ut = normal * v + b.tail<2>();
+    const double f = s_perp.dot(ut);
+    const double along = s.dot(ut);
+    if (std::abs(f) <= 1e-13 * scale) {
+      if (along > 1e-12 * scale) return false;  // the slip would push the force: not Coulomb
+      lambda = Eigen::Vector3d(normal, mu * normal * s[0], mu * normal * s[1]);
+      return true;
+    }
+    const double normal_rate = -normal * mu * d_nt.dot(s_perp) / g;
+    const double slope = -along + s_perp.dot(normal_rate * v + normal * mu * (d_tt * s_perp));
+    if (!(std::abs(slope) > 0.0)) return false;
+    theta -= std::clamp(f / slope, -1.0, 1.0);  // a full turn per step would skip roots
+  }
+  return false;
+}
+
 // Local Coulomb problem of one contact, with the others frozen: u = D λ + b.
-// Alternates the exact normal step λ_n = max(0, λ_n - u_n / D_nn) with the exact
-// tangential step (disc problem above) until the local iterate stops moving; the fixed
-// point satisfies 0 <= λ_n ⟂ u_n >= 0 and the Coulomb law, so the sweep is a true NSGS.
-// Three shortcuts reach the same solution with less work: a contact at rest (λ = 0) with
-// b_n >= 0 stays open (the normal step keeps λ_n = 0, so the disc has radius 0); a
+// Shortcuts first: b_n >= 0 leaves the contact open (λ = 0 gives u = b, a solution); a
 // sticking contact has u = 0, so λ = -D⁻¹ b, accepted when it lies inside the cone
-// (λ_n > 0, |λ_t| <= μ λ_n) — the alternation converges linearly to that same point, often
-// in 10+ rounds when D couples normal and tangents (symmetric tangential blocks only: the
-// non-symmetric fallback below stops after kMaxLocalIterations rounds, short of that
-// point, and its results are kept as they were); and without normal-tangential coupling
-// (D_nt = D_tn = 0) λ_n = max(0, -b_n / D_nn) is exact at once and one disc problem
-// finishes the step.
+// (λ_n > 0, |λ_t| <= μ λ_n); without normal-tangential coupling (D_nt = D_tn = 0) and with
+// a symmetric D_tt, λ_n = max(0, -b_n / D_nn) is exact at once and one disc problem
+// finishes the step. Otherwise the contact slides: slidingLocalSolve above, started from
+// the direction of the sticking force, then of the current force, then against the slip
+// the normal force alone would cause. Only if none lands on a root does it alternate the
+// exact normal step λ_n = max(0, λ_n - u_n / D_nn) with the tangential step (disc problem
+// or, for a non-symmetric D_tt, a projected gradient step) until λ stops moving.
 inline void coulombLocalStep(const LocalBlock& blk, const Eigen::Vector3d& b, Eigen::Vector3d& lambda) {
   if (b[0] >= 0.0 && lambda[0] == 0.0 && lambda[1] == 0.0 && lambda[2] == 0.0) return;
-  if (blk.invertible && blk.tangent_symmetric) {
+  Eigen::Vector2d stick_t = Eigen::Vector2d::Zero();
+  if (blk.invertible) {
     const Eigen::Vector3d stick = -(blk.D_inverse * b);
     const double radius = blk.mu * stick[0];
     if (stick[0] > 0.0 && stick[1] * stick[1] + stick[2] * stick[2] <= radius * radius) {
       lambda = stick;
       return;
     }
+    stick_t = stick.tail<2>();
   }
   if (!blk.coupled && blk.tangent_symmetric) {
     lambda[0] = std::max(0.0, -b[0] * blk.inv_nn);
     coulombTangentStep(blk, b.tail<2>(), lambda);
     return;
+  }
+  const Eigen::Vector2d slip_alone = -(b.tail<2>() - blk.D.block<2, 1>(1, 0) * (b[0] * blk.inv_nn));
+  for (const Eigen::Vector2d& guess : {Eigen::Vector2d(lambda.tail<2>()), stick_t, slip_alone}) {
+    if (guess.squaredNorm() > 0.0 && slidingLocalSolve(blk.D, blk.mu, b, std::atan2(guess[1], guess[0]), lambda))
+      return;
   }
   for (int it = 0; it < kMaxLocalIterations; ++it) {
     const Eigen::Vector3d before = lambda;
