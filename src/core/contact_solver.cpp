@@ -223,7 +223,8 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   // Newton on the disc stays whole: its globalisation (nlgs warm-up and bursts, ε from the
   // residual) reaches 1e-8 on Capsules-i101-404 whole but not on one of its 32 islands alone.
   const bool split = kind != SolverKind::kNewton || !ctx.hasFriction();
-  if (params_.islands && split && !params_.displayDebug && p.problem->contacts.size() > 1) {
+  if (params_.islands && split && !params_.displayDebug && p.problem->contacts.size() > 1 &&
+      p.problem->rowCount() >= kMinRowsForIslands) {
     Islands found = findIslands(*p.problem);
     if (found.count() > 1) islands = std::make_unique<IslandSolver>(ctx, std::move(found));
   }

@@ -135,7 +135,8 @@ TEST(Islands, IslandProblemKeepsTheRowsOfItsContacts) {
 TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
   for (bool sparse : {false, true}) {
     for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
-      Generated g = generate(4, 5, kind == SolverKind::kPgs ? Kinds::kFrictionless : Kinds::kMixed, 6);
+      Generated g = generate(4, 10, kind == SolverKind::kPgs ? Kinds::kFrictionless : Kinds::kMixed, 6);
+      ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);  // else both solves are whole
       const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
       const SolveResult whole = solveProblem(p, paramsFor(kind, 1e-300, 37, false));
       const SolveResult split = solveProblem(p, paramsFor(kind, 1e-300, 37, true));
@@ -153,7 +154,8 @@ TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
 // islands reaches the whole problem's solution, and the tolerance on the whole problem.
 TEST(Islands, UniqueSolutionsEqualTheWholeProblem) {
   for (bool sparse : {false, true}) {
-    Generated g = generate(6, 5, Kinds::kFrictionless, 7, 0.05);
+    Generated g = generate(6, 6, Kinds::kFrictionless, 7, 0.05);
+    ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
     const Problem p = sparse ? hard::toBlockSparse(g.problem) : g.problem;
     const SolveResult reference = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-12, 100000, false));
     ASSERT_TRUE(reference.converged) << reference.message;
@@ -170,7 +172,8 @@ TEST(Islands, UniqueSolutionsEqualTheWholeProblem) {
 // The per-island tolerances add up to the whole problem's: converged means the whole
 // residual meets the tolerance, also with islands whose d_free is zero.
 TEST(Islands, ConvergedMeansTheWholeResidualMeetsTheTolerance) {
-  Generated g = generate(5, 4, Kinds::kMixed, 8);
+  Generated g = generate(5, 8, Kinds::kMixed, 8);
+  ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
   const std::vector<int> off = g.problem.rowOffsets();
   for (int i = 0; i < static_cast<int>(g.problem.contacts.size()); ++i)
     if (g.group_of[i] == 2)
@@ -202,7 +205,8 @@ TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
 // Warm start and maxF with islands: a second solve from the first one's forces converges at
 // once; maxF drops contacts and re-solves per island as on the whole problem.
 TEST(Islands, WarmStartAndMaxFWork) {
-  Generated g = generate(4, 5, Kinds::kFrictionless, 10, 0.05);
+  Generated g = generate(4, 10, Kinds::kFrictionless, 10, 0.05);
+  ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
   SolverParams p = paramsFor(SolverKind::kPgs, 1e-10, 100000, true);
   p.initial_guess = true;
   ContactSolver solver(p);
@@ -224,7 +228,8 @@ TEST(Islands, WarmStartAndMaxFWork) {
 
 // A kernel's message names the contact by its index in the whole problem, not in its island.
 TEST(Islands, MessagesNameContactsOfTheWholeProblem) {
-  Generated g = generate(3, 4, Kinds::kFrictionless, 71);
+  Generated g = generate(3, 12, Kinds::kFrictionless, 71);
+  ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
   Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(g.problem.W);
   const int k = 9;  // its own island, with no self-compliance
   W.row(k).setZero();
@@ -279,6 +284,7 @@ Problem bodyForm(int groups, int per_group, unsigned seed) {
 TEST(Islands, TheBodyFormSplitsByBodyAndEqualsTheWholeUnbuiltSolve) {
   const Problem p = bodyForm(6, 5, 61);
   ASSERT_EQ(validateProblem(p), "");
+  ASSERT_GE(p.rowCount(), kMinRowsForIslands);
   Problem assembled = p;
   assembled.bodies.reset();
   assembled.W = p.bodies->assemble();

@@ -17,6 +17,11 @@
 
 namespace lcp_contact_solver::core {
 
+// Below this many rows a problem is solved whole: building the island problems (a few
+// thousand instructions each) costs more than a 30-row solve saves by stopping settled
+// islands early (lcp_trivial, 9 one-row islands: 6.8 µs split, 2.0 µs whole).
+constexpr int kMinRowsForIslands = 32;
+
 struct Islands {
   std::vector<int> island_of;              // island of each contact
   std::vector<std::vector<int>> contacts;  // contacts of each island, ascending
