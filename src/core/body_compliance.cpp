@@ -149,9 +149,21 @@ BlockSparseMatrix BodyCompliance::assemble() const {
 
 Eigen::MatrixXd BodyCompliance::toDense() const { return assemble().toDense(); }
 
-Eigen::MatrixXd contactDiagonalBlock(const Problem& problem, const std::vector<int>& offsets, int i) {
+ContactBlock contactDiagonalBlock(const Problem& problem, const std::vector<int>& offsets, int i) {
+  const int n = offsets[i + 1] - offsets[i];
   if (problem.bodies) return problem.bodies->diagonalBlock(i, offsets[i]);
-  return diagonalBlock(problem.W, offsets[i], offsets[i + 1] - offsets[i]);
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) return dense->block(offsets[i], offsets[i], n, n);
+  const auto& sparse = std::get<BlockSparseMatrix>(problem.W);
+  // Usual case: block row i is contact i; its diagonal block is read in place.
+  if (i < sparse.blockCount() && sparse.block_offset[i] == offsets[i] && sparse.block_offset[i + 1] == offsets[i + 1]) {
+    ContactBlock block = ContactBlock::Zero(n, n);
+    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k)
+      if (sparse.block_col[k] == i)
+        block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            sparse.values.data() + sparse.value_start[k], n, n);
+    return block;
+  }
+  return diagonalBlock(problem.W, offsets[i], n);
 }
 
 Eigen::MatrixXd leadingComplianceWindow(const Problem& problem, int n) {

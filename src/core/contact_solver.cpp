@@ -33,10 +33,12 @@ Eigen::VectorXd ContactSolver::initialGuess(const Problem& problem, const std::v
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(offsets.back());
   if (!params_.initial_guess) return lambda;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const auto it = warm_start_.find(problem.contacts[i].id);
+    const std::int64_t id = problem.contacts[i].id;
+    const auto it = std::lower_bound(remembered_.begin(), remembered_.end(), id,
+                                     [](const RememberedContact& r, std::int64_t key) { return r.id < key; });
     // Leading rows (normal first) also seed a contact that lost rows, e.g. μ set to 0.
-    if (it == warm_start_.end() || static_cast<int>(it->second.size()) < problem.contacts[i].rows) continue;
-    for (int k = 0; k < problem.contacts[i].rows; ++k) lambda[offsets[i] + k] = it->second[k];
+    if (it == remembered_.end() || it->id != id || it->rows < problem.contacts[i].rows) continue;
+    for (int k = 0; k < problem.contacts[i].rows; ++k) lambda[offsets[i] + k] = remembered_forces_[it->offset + k];
   }
   return lambda;
 }
@@ -44,11 +46,19 @@ Eigen::VectorXd ContactSolver::initialGuess(const Problem& problem, const std::v
 void ContactSolver::rememberForces(const Problem& problem, const std::vector<int>& offsets,
                                    const Eigen::VectorXd& lambda) {
   // Only the contacts of the latest solve are kept: ids that vanished do not pile up.
-  warm_start_.clear();
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const int rows = problem.contacts[i].rows;
-    warm_start_[problem.contacts[i].id].assign(lambda.data() + offsets[i], lambda.data() + offsets[i] + rows);
+  remembered_forces_.assign(lambda.data(), lambda.data() + lambda.size());
+  remembered_.clear();
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i)
+    remembered_.push_back({problem.contacts[i].id, offsets[i], problem.contacts[i].rows});
+  std::stable_sort(remembered_.begin(), remembered_.end(),
+                   [](const RememberedContact& a, const RememberedContact& b) { return a.id < b.id; });
+  // A repeated id keeps its last contact, as an assignment by id would.
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < remembered_.size(); ++i) {
+    if (i + 1 < remembered_.size() && remembered_[i + 1].id == remembered_[i].id) continue;
+    remembered_[kept++] = remembered_[i];
   }
+  remembered_.resize(kept);
 }
 
 SolveResult ContactSolver::invalidInput(const std::string& error) const {

@@ -71,7 +71,7 @@ struct BodyCompliance {
 };
 
 // The diagonal block of contact i of the problem's compliance, whichever form it has.
-Eigen::MatrixXd contactDiagonalBlock(const Problem& problem, const std::vector<int>& offsets, int i);
+ContactBlock contactDiagonalBlock(const Problem& problem, const std::vector<int>& offsets, int i);
 // The leading n × n window of the problem's W, whichever form it has (markers).
 Eigen::MatrixXd leadingComplianceWindow(const Problem& problem, int n);
 // y = W x for the problem's compliance, whichever form it has.

@@ -12,7 +12,6 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace lcp_contact_solver::core {
@@ -37,8 +36,11 @@ class ContactSolver {
   SolveResult solveInPlace(Problem& problem);
 
   // Forgets the forces remembered for warm starting.
-  void resetWarmStart() { warm_start_.clear(); }
-  std::size_t warmStartSize() const { return warm_start_.size(); }
+  void resetWarmStart() {
+    remembered_.clear();
+    remembered_forces_.clear();
+  }
+  std::size_t warmStartSize() const { return remembered_.size(); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -60,7 +62,15 @@ class ContactSolver {
   void rememberForces(const Problem& problem, const std::vector<int>& offsets, const Eigen::VectorXd& lambda);
 
   SolverParams params_;
-  std::unordered_map<std::int64_t, std::vector<double>> warm_start_;
+  // The forces of the latest solve by contact id, flat so that a cycle allocates nothing
+  // per contact: entries sorted by id, each naming its rows of remembered_forces_.
+  struct RememberedContact {
+    std::int64_t id;
+    int offset;
+    int rows;
+  };
+  std::vector<RememberedContact> remembered_;
+  std::vector<double> remembered_forces_;
 };
 
 // One-off solve without warm start memory.

@@ -104,6 +104,8 @@ bool isSymmetric(const ComplianceMatrix& W, double relative_tolerance);
 void multiply(const ComplianceMatrix& W, const Eigen::VectorXd& x, Eigen::VectorXd& y);
 // Diagonal block of contact rows [offset, offset + n).
 Eigen::MatrixXd diagonalBlock(const ComplianceMatrix& W, int offset, int n);
+// One contact's diagonal block (1..6 rows): fixed capacity, so forming it allocates nothing.
+using ContactBlock = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
 
 // The body form of the compliance (per-body compliance and contact Jacobians, W not
 // assembled): body_compliance.h.

@@ -14,7 +14,7 @@ namespace lcp_contact_solver::core::local_laws {
 namespace {
 
 // The torsional/rolling part of a contact's local data (D is its whole diagonal block).
-std::string prepareExtendedRows(const Contact& c, const Eigen::MatrixXd& D, const std::string& where,
+std::string prepareExtendedRows(const Contact& c, const ContactBlock& D, const std::string& where,
                                 LocalBlock& blk) {
   blk.D_full.setZero();
   blk.D_full.topLeftCorner(c.rows, c.rows) = D;
@@ -55,13 +55,12 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.kind = LocalKind::kSkip;
       continue;
     }
-    Eigen::MatrixXd D =
-        contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
+    ContactBlock D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));  // W or the body form
     D.diagonal().array() += r;
     // Named only for a message: no string per contact per solve.
     const auto where = [&] { return "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ")"; };
     if (c.type == ContactType::kBilateral) {
-      Eigen::FullPivLU<Eigen::MatrixXd> lu(D);
+      Eigen::FullPivLU<ContactBlock> lu(D);
       if (!lu.isInvertible()) return where() + " has a singular bilateral block of W";
       blk.kind = LocalKind::kBilateral;
       blk.bilateral_block = D;
