@@ -187,6 +187,21 @@ TEST(DiscSolvers, RankDeficientStackNewtonReachesTenDigits) {
   EXPECT_LE(r.residual, 1e-10);
 }
 
+// Asked for a tolerance below round-off, newton and prox reach their floor and say so
+// (numerical_failure, the best iterate) instead of spending all of maxIt there.
+TEST(DiscSolvers, AnUnreachableToleranceEndsAtTheFloorNotAtMaxIt) {
+  const Problem p = randomFrictionalProblem(8, 31, 0.9, 1e-6);
+  for (SolverKind kind : {SolverKind::kNewton, SolverKind::kProx}) {
+    SolverParams params = tight(kind, 1e-300);
+    params.maxIt = 2000000;
+    const SolveResult r = solveProblem(p, params);
+    expectFinite(r);
+    EXPECT_EQ(r.status, SolveStatus::kNumericalFailure) << solverName(kind) << ": " << r.message;
+    EXPECT_LT(r.iterations, params.maxIt / 4) << solverName(kind);
+    EXPECT_LE(r.residual, 1e-12) << solverName(kind);
+  }
+}
+
 TEST(DiscSolvers, HonestFailureKeepsTheBestIterate) {
   const Problem p = randomFrictionalProblem(8, 31, 0.9, 1e-6);
   for (SolverKind kind : kDiscSolvers) {

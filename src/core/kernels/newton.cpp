@@ -32,7 +32,9 @@
 // residual 1e-3), and whenever 10 Newton steps fail to halve the residual, up to 100
 // nlgs sweeps from the best iterate (or a tenfold decrease) move the states on before
 // Newton resumes. A warm-started solve that stalls a second time restarts once from
-// λ = 0. Iterations count Newton steps plus nlgs sweeps.
+// λ = 0; one whose best residual has not halved over five such rounds stops with
+// numerical_failure (a floor of its own, not worth the rest of the budget). Iterations
+// count Newton steps plus nlgs sweeps.
 //
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
@@ -52,6 +54,7 @@
 #include <Eigen/SparseLU>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -79,6 +82,10 @@ constexpr int kBurstSweeps = 100;
 constexpr double kBurstReduction = 0.1;
 // A warm-started solve that stalls this often restarts once from λ = 0.
 constexpr int kStallsBeforeColdStart = 2;
+// Giving up: when the best residual has not halved over this many stalls (each 10 Newton
+// steps and a burst), Newton sits at a floor of its own (round-off on a singular
+// linearisation) and more rounds only burn the budget; it says so instead.
+constexpr int kFruitlessStalls = 5;
 
 enum class RowKind : std::uint8_t { kIdentity, kNormal, kFrictional, kFrictionalNormalOnly, kBilateral };
 
@@ -411,6 +418,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
   const bool warm_started = start.squaredNorm() > 0.0;
   int stalls = 0;
+  std::vector<double> best_at_stall;  // the best residual at each stall
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   SolverParams burst_params = warm_params;
@@ -450,6 +458,20 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       since_checkpoint = 0;
       const bool stalled = residual > kStallFactor * checkpoint_residual;
       stalls += stalled ? 1 : 0;
+      if (stalled) {
+        best_at_stall.push_back(best_residual);
+        const std::size_t k = best_at_stall.size();
+        if (k > kFruitlessStalls && best_residual > 0.5 * best_at_stall[k - 1 - kFruitlessStalls]) {
+          report.status = SolveStatus::kNumericalFailure;
+          char line[160];
+          std::snprintf(line, sizeof line,
+                        "newton: stalled at residual %.3g (not halved over %d rounds of Newton steps and "
+                        "nlgs sweeps); best iterate returned",
+                        best_residual, kFruitlessStalls);
+          report.message = line;
+          break;
+        }
+      }
       if (stalled && stalls == kStallsBeforeColdStart && warm_started) {
         // A warm start that still stalls after a burst is dropped: on a rank-deficient W
         // the previous forces can carry internal (null-space) forces that leave the

@@ -20,7 +20,8 @@
 // Inexact sub-problems: each runs newton (newton.cpp, its own nlgs warm start and bursts)
 // to a tolerance tied to the current true residual, max(tolerance / 2, residual / 10) on
 // the sub-problem's residual, so early sub-problems are cheap and the inexactness falls
-// with the outer residual (summable errors, as inexact proximal point needs).
+// with the outer residual (summable errors, as inexact proximal point needs), and at most
+// kMaxInnerIterations: an unsolved sub-problem counts as a failure and raises σ.
 //
 // Every outer step measures the true residual (residual.h) on the original problem and
 // keeps the best iterate. Iterations count the inner iterations (nlgs sweeps + Newton
@@ -44,6 +45,10 @@ constexpr double kSigmaMin = 1e-12;      // times the mean diagonal
 constexpr double kSigmaMax = 1e4;        // times the mean diagonal
 constexpr double kInnerReduction = 0.1;  // inner tolerance: this times the outer residual
 constexpr int kMaxOuterSteps = 200;
+// Iterations (sweeps + Newton steps) one sub-problem may take: a sub-problem Newton cannot
+// solve (σ so small that it is as singular as the problem) ends here and gets a larger σ,
+// instead of spending the whole remaining budget (maxIt, time_budget) on one step.
+constexpr int kMaxInnerIterations = 1000;
 
 double meanDiagonal(const Problem& problem, double regularization) {
   const int n = problem.rowCount();
@@ -111,7 +116,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     sub.d_free = problem.d_free - sigma * centre;
     inner.regularization = ctx.regularization + sigma;
     inner_params.tolerance = std::max(0.5 * params.tolerance, kInnerReduction * residual);
-    inner_params.maxIt = params.maxIt - iterations;
+    inner_params.maxIt = std::min(params.maxIt - iterations, kMaxInnerIterations);
     const KernelReport step = runNewton(inner, lambda);
     iterations += step.iterations;
     if (!lambda.allFinite()) lambda = best;
