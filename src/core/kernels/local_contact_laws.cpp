@@ -86,19 +86,22 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     blk.D = D.topLeftCorner<3, 3>();
     blk.coupled = D(0, 1) != 0.0 || D(0, 2) != 0.0 || D(1, 0) != 0.0 || D(2, 0) != 0.0;
     {
-      const Eigen::Matrix3d D3 = D.topLeftCorner<3, 3>();
-      Eigen::FullPivLU<Eigen::Matrix3d> lu(D3);
-      // Only a well-conditioned block: the one-shot solution must be as accurate as the
+      // Closed-form inverse (cofactors), kept only for a well-conditioned block (reciprocal
+      // condition number in the 1-norm): the one-shot solution must be as accurate as the
       // iteration it replaces.
+      const Eigen::Matrix3d D3 = D.topLeftCorner<3, 3>();
+      const Eigen::Matrix3d inverse = D3.inverse();
+      const double norm = D3.cwiseAbs().colwise().sum().maxCoeff();
+      const double inverse_norm = inverse.cwiseAbs().colwise().sum().maxCoeff();
       const double cond_floor = 1e-10;
-      const Eigen::Vector3d pivots = lu.matrixLU().diagonal().cwiseAbs();
-      blk.invertible = lu.isInvertible() && pivots.minCoeff() > cond_floor * pivots.maxCoeff();
-      if (blk.invertible) blk.D_inverse = lu.inverse();
+      blk.invertible = inverse.allFinite() && norm > 0.0 && 1.0 / (norm * inverse_norm) > cond_floor;
+      if (blk.invertible) blk.D_inverse = inverse;
     }
     const Eigen::Matrix2d T = D.block<2, 2>(1, 1);
     const double scale = T.cwiseAbs().maxCoeff();
     blk.tangent_symmetric = std::abs(T(0, 1) - T(1, 0)) <= 1e-12 * scale;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (T + T.transpose()));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
+    eig.computeDirect(0.5 * (T + T.transpose()));  // closed form for 2×2
     blk.tangent_basis = eig.eigenvectors();
     blk.tangent_eigen = eig.eigenvalues();
     const double a_max = blk.tangent_eigen.maxCoeff();

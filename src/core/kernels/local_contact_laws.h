@@ -142,21 +142,24 @@ inline void coulombTangentStep(const LocalBlock& blk, const Eigen::Vector2d& bt,
 //   λ_n(θ) = -b_n / g(θ),        g(θ) = D_nn + μ D_nt·s   (λ_n > 0: b_n < 0 and g > 0),
 //   u_t(θ) = λ_n(θ) v(θ) + b_t,  v(θ) = D_tn + μ D_tt s,
 // and Coulomb's law asks the slip to oppose the force: f(θ) = s⊥·u_t(θ) = 0 with
-// s·u_t(θ) <= 0, s⊥ = (-sin θ, cos θ). One unknown instead of three: Newton on θ with
+// s·u_t(θ) <= 0, s⊥ = (-sin θ, cos θ). One unknown instead of three: Newton on θ (the
+// slip direction s, started from the guess `s`) with
 //   f'(θ) = -s·u_t + s⊥·(λ_n' v + λ_n μ D_tt s⊥),   λ_n' = -λ_n μ (D_nt·s⊥) / g,
 // quadratic near a simple root, where the alternation below converges only linearly (10+
 // rounds when D couples normal and tangents, and never exactly for a non-symmetric D_tt).
 // Returns false, leaving λ alone, unless it lands on a root that satisfies the law.
-inline bool slidingLocalSolve(const Eigen::Matrix3d& D, double mu, const Eigen::Vector3d& b, double theta,
+inline bool slidingLocalSolve(const Eigen::Matrix3d& D, double mu, const Eigen::Vector3d& b, Eigen::Vector2d s,
                               Eigen::Vector3d& lambda) {
   if (!(b[0] < 0.0)) return false;
+  const double length = s.norm();
+  if (!(length > 0.0)) return false;
+  s /= length;
   const Eigen::Vector2d d_nt = D.block<1, 2>(0, 1).transpose();
   const Eigen::Vector2d d_tn = D.block<2, 1>(1, 0);
   const Eigen::Matrix2d d_tt = D.block<2, 2>(1, 1);
-  const double scale = std::abs(b[1]) + std::abs(b[2]) + std::abs(b[0]) * (d_tn.cwiseAbs().sum() + mu * d_tt.cwiseAbs().sum()) /
-                                                           std::abs(D(0, 0));
+  const double scale = std::abs(b[1]) + std::abs(b[2]) +
+                       std::abs(b[0] / D(0, 0)) * (d_tn.cwiseAbs().sum() + mu * d_tt.cwiseAbs().sum());
   for (int it = 0; it < 16; ++it) {
-    const Eigen::Vector2d s(std::cos(theta), std::sin(theta));
     const Eigen::Vector2d s_perp(-s[1], s[0]);
     const double g = D(0, 0) + mu * d_nt.dot(s);
     if (!(g > 0.0)) return false;
@@ -173,7 +176,11 @@ inline bool slidingLocalSolve(const Eigen::Matrix3d& D, double mu, const Eigen::
     const double normal_rate = -normal * mu * d_nt.dot(s_perp) / g;
     const double slope = -along + s_perp.dot(normal_rate * v + normal * mu * (d_tt * s_perp));
     if (!(std::abs(slope) > 0.0)) return false;
-    theta -= std::clamp(f / slope, -1.0, 1.0);  // a full turn per step would skip roots
+    // Turn by the Newton step along the circle: s + δ s⊥, normalised, turns by atan δ,
+    // which agrees with δ to third order (still quadratic), without trigonometry; |δ| <= 1
+    // (45°) keeps a far step from skipping roots.
+    const double delta = std::clamp(-f / slope, -1.0, 1.0);
+    s = (s + delta * s_perp) / std::sqrt(1.0 + delta * delta);
   }
   return false;
 }
@@ -207,7 +214,7 @@ inline void coulombLocalStep(const LocalBlock& blk, const Eigen::Vector3d& b, Ei
   }
   const Eigen::Vector2d slip_alone = -(b.tail<2>() - blk.D.block<2, 1>(1, 0) * (b[0] * blk.inv_nn));
   for (const Eigen::Vector2d& guess : {Eigen::Vector2d(lambda.tail<2>()), stick_t, slip_alone}) {
-    if (guess.squaredNorm() > 0.0 && slidingLocalSolve(blk.D, blk.mu, b, std::atan2(guess[1], guess[0]), lambda))
+    if (guess.squaredNorm() > 0.0 && slidingLocalSolve(blk.D, blk.mu, b, guess, lambda))
       return;
   }
   for (int it = 0; it < kMaxLocalIterations; ++it) {
