@@ -30,7 +30,11 @@ using Clock = std::chrono::steady_clock;
 // diagonally dominant on the normal rows) and rank deficiency (active rows above the bodies'
 // 6 DoF each when the body form is known, else a quarter of the contacts with a nearly
 // parallel partner). The start is measured first: a
-// warm start that already meets the tolerance runs no member.
+// warm start that already meets the tolerance runs no member. Then, before any feature is
+// measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, and up to ten
+// if their per-sweep rate reaches the tolerance within ten (a few weakly coupled contacts
+// with exact local solves end there, at a fraction of a Newton step's cost); the plan
+// continues from the probe's best iterate.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
@@ -56,6 +60,12 @@ constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start 
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;
 constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
+// Every plan starts with a probe of at most this many Gauss-Seidel sweeps: on weakly coupled
+// problems (exact local solves, a few contacts) they meet the tolerance; otherwise three
+// cost about what newton's own warm-up sweeps would have, and the plan continues from
+// their best iterate.
+constexpr int kAutoProbeSweeps = 10;
+constexpr int kAutoProbeFirst = 3;  // then the rest only if their rate reaches the tolerance
 
 struct AutoFeatures {
   int rows = 0;
@@ -285,6 +295,16 @@ bool anyIgnored(const SolveContext& ctx) {
   return std::find(ctx.ignored.begin(), ctx.ignored.end(), true) != ctx.ignored.end();
 }
 
+// The Gauss-Seidel kernel that can probe this problem (kAuto: none): not where the plan is
+// fixed (torsional/rolling contacts, the pyramid), nor without a positive normal diagonal.
+SolverKind probeKind(const SolveContext& ctx) {
+  if (hasExtendedFriction(*ctx.problem)) return SolverKind::kAuto;
+  const bool friction = ctx.hasFriction();
+  if (friction && pyramidModel(*ctx.params)) return SolverKind::kAuto;
+  if (!ctx.problem->bodies && !positiveDiagonal(ctx)) return SolverKind::kAuto;
+  return friction ? SolverKind::kNlgs : SolverKind::kPgs;
+}
+
 }  // namespace
 
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
@@ -316,9 +336,24 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     double rate = 0.0;  // log residual decrease per second, last slice
     bool tried = false;
     int retry_origin = 0;  // 0 not needed, 1 due, 2 done
+    bool probe = false;    // one slice only, then out of the rotation
   };
   std::vector<Member> members;
-  for (SolverKind kind : autoPlan(ctx)) members.push_back({kind, firstSlice(kind)});
+  auto addPlan = [&] {
+    for (SolverKind kind : autoPlan(ctx)) members.push_back({kind, firstSlice(kind)});
+  };
+  // The probe runs before the features are even measured: a problem it solves pays for
+  // nothing else.
+  const SolverKind probe_kind = by_residual ? probeKind(ctx) : SolverKind::kAuto;
+  if (probe_kind != SolverKind::kAuto) {
+    Member probe{probe_kind, kAutoProbeFirst};
+    probe.probe = true;
+    members.push_back(probe);
+  } else {
+    addPlan();
+  }
+  const double probe_start = best_residual;
+  int probe_sweeps = 0;
   Problem assembled;                       // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
@@ -412,6 +447,23 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       report.message =
           "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
       break;
+    }
+    if (cur.probe) {
+      // More sweeps only if their rate so far reaches the tolerance within the probe;
+      // otherwise the plan starts (from the best iterate).
+      probe_sweeps += r.iterations;
+      const int left = kAutoProbeSweeps - probe_sweeps;
+      if (left > 0 && r.iterations > 0 && best_residual < probe_start && !failedToRun(r.status)) {
+        const double per_sweep = std::pow(best_residual / probe_start, 1.0 / probe_sweeps);
+        if (per_sweep < 1.0 && std::log(params.tolerance / best_residual) / std::log(per_sweep) <= left) {
+          cur.slice = left;
+          continue;
+        }
+      }
+      members.clear();
+      addPlan();
+      m = 0;
+      continue;
     }
     if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
       last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
