@@ -33,8 +33,8 @@ using Clock = std::chrono::steady_clock;
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, and up to ten
 // if their per-sweep rate reaches the tolerance within ten (a few weakly coupled contacts
-// with exact local solves end there, at a fraction of a Newton step's cost); the plan
-// continues from the probe's best iterate.
+// with exact local solves end there, at a fraction of a Newton step's cost); otherwise the
+// probe leaves no trace and the plan starts from the start, as it would have without it.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
@@ -61,9 +61,8 @@ constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start 
 constexpr double kAutoSparseGs = 2.0;
 constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
 // Every plan starts with a probe of at most this many Gauss-Seidel sweeps: on weakly coupled
-// problems (exact local solves, a few contacts) they meet the tolerance; otherwise three
-// cost about what newton's own warm-up sweeps would have, and the plan continues from
-// their best iterate.
+// problems (exact local solves, a few contacts) they meet the tolerance; otherwise they are
+// forgotten (at most ten sweeps lost) and the plan starts as it would have without them.
 constexpr int kAutoProbeSweeps = 10;
 constexpr int kAutoProbeFirst = 3;  // then the rest only if their rate reaches the tolerance
 
@@ -460,6 +459,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           continue;
         }
       }
+      // Not solved: the probe leaves no trace, the plan starts from the start as it would
+      // have without it (apgd from a Gauss-Seidel iterate crawled on the box pyramids: 80×).
+      best = origin;
+      best_residual = probe_start;
+      best_error = probe_start;
+      best_model = FrictionModel::kCoulombDisc;
       members.clear();
       addPlan();
       m = 0;
