@@ -157,10 +157,8 @@ ContactBlock contactDiagonalBlock(const Problem& problem, const std::vector<int>
   // Usual case: block row i is contact i; its diagonal block is read in place.
   if (i < sparse.blockCount() && sparse.block_offset[i] == offsets[i] && sparse.block_offset[i + 1] == offsets[i + 1]) {
     ContactBlock block = ContactBlock::Zero(n, n);
-    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k)
-      if (sparse.block_col[k] == i)
-        block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-            sparse.values.data() + sparse.value_start[k], n, n);
+    if (const double* v = sparse.diagonalValues(i))
+      block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v, n, n);
     return block;
   }
   return diagonalBlock(problem.W, offsets[i], n);

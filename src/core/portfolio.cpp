@@ -452,8 +452,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       break;
     }
     if (cur.probe) {
-      // More sweeps only if their rate so far reaches the tolerance within the probe;
-      // otherwise the plan starts (from the best iterate).
+      // More sweeps only if their rate so far reaches the tolerance within the probe.
       probe_sweeps += r.iterations;
       const int left = kAutoProbeSweeps - probe_sweeps;
       if (left > 0 && r.iterations > 0 && best_residual < probe_start && !failedToRun(r.status)) {

@@ -93,6 +93,13 @@ Eigen::MatrixXd BlockSparseMatrix::toDense() const {
   return dense;
 }
 
+const double* BlockSparseMatrix::diagonalValues(int i) const {
+  const double* values = nullptr;
+  for (int k = row_start[i]; k < row_start[i + 1]; ++k)
+    if (block_col[k] == i) values = this->values.data() + value_start[k];
+  return values;
+}
+
 void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   y.setZero(rows());
   for (int i = 0; i < blockCount(); ++i) {
@@ -223,12 +230,8 @@ Eigen::MatrixXd diagonalBlock(const ComplianceMatrix& W, int offset, int n) {
   const auto row = std::lower_bound(sparse.block_offset.begin(), sparse.block_offset.end(), offset);
   if (row != sparse.block_offset.end() && *row == offset && row + 1 != sparse.block_offset.end() &&
       *(row + 1) == offset + n) {
-    const int i = static_cast<int>(row - sparse.block_offset.begin());
-    for (int k = sparse.row_start[i]; k < sparse.row_start[i + 1]; ++k) {
-      if (sparse.block_col[k] != i) continue;
-      block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-          sparse.values.data() + sparse.value_start[k], n, n);
-    }
+    if (const double* v = sparse.diagonalValues(static_cast<int>(row - sparse.block_offset.begin())))
+      block = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v, n, n);
     return block;
   }
   // Any other window: sum every stored piece that overlaps it.

@@ -54,8 +54,8 @@
 #include <Eigen/SparseLU>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <string>
@@ -81,7 +81,7 @@ constexpr double kStallFactor = 0.5;
 constexpr int kBurstSweeps = 100;
 constexpr double kBurstReduction = 0.1;
 // A warm-started solve that stalls this often restarts once from λ = 0.
-constexpr int kStallsBeforeColdStart = 2;
+constexpr std::size_t kStallsBeforeColdStart = 2;
 // Giving up: when the best residual has not halved over this many stalls (each 10 Newton
 // steps and a burst), Newton sits at a floor of its own (round-off on a singular
 // linearisation) and more rounds only burn the budget; it says so instead.
@@ -417,8 +417,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   bool nlgs_usable =
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
   const bool warm_started = start.squaredNorm() > 0.0;
-  int stalls = 0;
-  std::vector<double> best_at_stall;  // the best residual at each stall
+  std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   SolverParams burst_params = warm_params;
@@ -457,7 +456,6 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (since_checkpoint >= kStallWindow) {
       since_checkpoint = 0;
       const bool stalled = residual > kStallFactor * checkpoint_residual;
-      stalls += stalled ? 1 : 0;
       if (stalled) {
         best_at_stall.push_back(best_residual);
         const std::size_t k = best_at_stall.size();
@@ -472,15 +470,15 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           break;
         }
       }
-      if (stalled && stalls == kStallsBeforeColdStart && warm_started) {
+      if (stalled && best_at_stall.size() == kStallsBeforeColdStart && warm_started) {
         // A warm start that still stalls after a burst is dropped: on a rank-deficient W
         // the previous forces can carry internal (null-space) forces that leave the
-        // linearisation badly conditioned; the cold start does not (best is kept).
+        // linearisation badly conditioned; the cold start does not (best is kept). It gets
+        // the same warm-up sweeps as the start did.
         lambda.setZero();
         if (nlgs_usable) {
-          burst_params.tolerance = warm_params.tolerance;
-          burst_params.maxIt = std::min(kWarmupSweeps, params.maxIt - newton_steps - sweeps);
-          sweeps += runNonlinearGaussSeidel(burst_ctx, lambda).iterations;
+          warm_params.maxIt = std::min(kWarmupSweeps, params.maxIt - newton_steps - sweeps);
+          sweeps += runNonlinearGaussSeidel(warm_ctx, lambda).iterations;
           if (!lambda.allFinite()) lambda.setZero();
         }
         c_reg = kRegularizationStart;
