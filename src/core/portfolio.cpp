@@ -31,10 +31,13 @@ using Clock = std::chrono::steady_clock;
 // 6 DoF each when the body form is known, else a quarter of the contacts with a nearly
 // parallel partner). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
-// measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, and up to ten
-// if their per-sweep rate reaches the tolerance within ten (a few weakly coupled contacts
-// with exact local solves end there, at a fraction of a Newton step's cost); otherwise the
-// probe leaves no trace and the plan starts from the start, as it would have without it.
+// measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, then stage by
+// stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
+// ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
+// (probeAllowance). A few weakly coupled contacts with exact local solves end there, at a
+// fraction of a Newton step's cost. Otherwise a Gauss-Seidel plan goes on from the probe's
+// iterate, newton too if the probe was no longer than its own warm-up, and any other plan
+// starts from the start, as it would have without the probe.
 // Then each member runs in slices of iterations from the best iterate so far: a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
@@ -60,11 +63,26 @@ constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start 
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
 constexpr double kAutoSparseGs = 2.0;
 constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep: nlgs at any tolerance
-// Every plan starts with a probe of at most this many Gauss-Seidel sweeps: on weakly coupled
-// problems (exact local solves, a few contacts) they meet the tolerance; otherwise they are
-// forgotten (at most ten sweeps lost) and the plan starts as it would have without them.
-constexpr int kAutoProbeSweeps = 10;
-constexpr int kAutoProbeFirst = 3;  // then the rest only if their rate reaches the tolerance
+// Every plan starts with a probe of Gauss-Seidel sweeps: on weakly coupled problems (exact
+// local solves, a few contacts) they meet the tolerance. Its allowances, in sweeps:
+constexpr int kAutoProbeFirst = 3;  // then stage by stage while their rate reaches the tolerance
+constexpr int kAutoProbeSweeps = 10;  // before the plan is measured; newton's own warm-up is as long
+constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
+// How many sweeps the probe may go on for, when their rate says they reach the tolerance,
+// before the plan's first member would be cheaper. A Newton step factorizes W (n³/3 flops
+// dense) where a sweep is one pass over it: a frictional Newton solve costs at least about n
+// sweeps (measured 1.7..17 n on the fc3d problems and the scenes). On an LCP newton's
+// active-set path is a few Cholesky steps: the probe's ten. apgd's iteration is one product
+// with W, about a sweep, and where Gauss-Seidel's rate is good apgd needs 2..6x its
+// iterations: fifty. Others (Lemke, prox, a fixed plan): ten.
+int probeAllowance(const std::vector<SolverKind>& plan, const SolveContext& ctx, bool friction) {
+  switch (plan.front()) {
+    case SolverKind::kNewton:
+      return friction ? std::max(kAutoProbeSweeps, ctx.problem->rowCount()) : kAutoProbeSweeps;
+    case SolverKind::kApgd: return kAutoProbeApgdSweeps;
+    default: return kAutoProbeSweeps;
+  }
+}
 
 struct AutoFeatures {
   int rows = 0;
@@ -206,11 +224,11 @@ int activeContacts(const SolveContext& ctx) {
   return n;
 }
 
-std::vector<SolverKind> autoPlan(const SolveContext& ctx) {
+// `friction`: ctx.hasFriction(), measured once per solve by the caller.
+std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
-  const bool friction = ctx.hasFriction();
   if (friction && pyramidModel(p)) return {K::kPgs, K::kLemke};
   // One contact (most islands of a scene at rest): Gauss-Seidel's local step is that
   // contact's own exact solve, so no feature is worth measuring.
@@ -286,6 +304,7 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
 
 // The residual of the start: of λ = 0 without a product with W (d = d_free).
 double startResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  if (!std::isnan(ctx.start_residual)) return ctx.start_residual;
   if (!lambda.isZero(0.0)) return ctx.residual(lambda);
   return naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
 }
@@ -297,9 +316,8 @@ bool anyIgnored(const SolveContext& ctx) {
 // The Gauss-Seidel kernel that can probe this problem (kAuto: none): not where the plan is
 // fixed (torsional/rolling contacts, the pyramid), not without a positive normal diagonal,
 // not for a block-sparse LCP.
-SolverKind probeKind(const SolveContext& ctx) {
+SolverKind probeKind(const SolveContext& ctx, bool friction) {
   if (hasExtendedFriction(*ctx.problem)) return SolverKind::kAuto;
-  const bool friction = ctx.hasFriction();
   if (friction && pyramidModel(*ctx.params)) return SolverKind::kAuto;
   if (!ctx.problem->bodies && !positiveDiagonal(ctx)) return SolverKind::kAuto;
   // A block-sparse LCP is presumed symmetric (below): newton's active-set path, a few
@@ -323,7 +341,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   KernelReport report;
   // The measure members are compared by: the disc residual, or for a pyramid the kernels'
   // own pyramid residual (the disc's is nonzero there by design).
-  const bool pyramid = pyramidModel(params) && ctx.hasFriction();
+  const bool friction = ctx.hasFriction();
+  const bool pyramid = pyramidModel(params) && friction;
   const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
   double best_residual = pyramid ? std::numeric_limits<double>::infinity() : startResidual(ctx, lambda);
   if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
@@ -342,20 +361,23 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     bool probe = false;    // one slice only, then out of the rotation
   };
   std::vector<Member> members;
-  auto addPlan = [&] {
-    for (SolverKind kind : autoPlan(ctx)) members.push_back({kind, firstSlice(kind)});
+  std::vector<SolverKind> plan;  // measured once, when first needed
+  auto planned = [&]() -> const std::vector<SolverKind>& {
+    if (plan.empty()) plan = autoPlan(ctx, friction);
+    return plan;
   };
   // The probe runs before the features are even measured: a problem it solves pays for
   // nothing else.
-  const SolverKind probe_kind = by_residual ? probeKind(ctx) : SolverKind::kAuto;
+  const SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
   if (probe_kind != SolverKind::kAuto) {
     Member probe{probe_kind, kAutoProbeFirst};
     probe.probe = true;
     members.push_back(probe);
   } else {
-    addPlan();
+    for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
   }
   const double probe_start = best_residual;
+  double stage_start = best_residual;
   int probe_sweeps = 0;
   Problem assembled;                       // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
@@ -452,25 +474,38 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       break;
     }
     if (cur.probe) {
-      // More sweeps only if their rate so far reaches the tolerance within the probe.
+      // Go on while the rate of the last stage reaches the tolerance within the probe's
+      // allowance (what the plan's first member would cost, in sweeps).
       probe_sweeps += r.iterations;
-      const int left = kAutoProbeSweeps - probe_sweeps;
-      if (left > 0 && r.iterations > 0 && best_residual < probe_start && !failedToRun(r.status)) {
-        const double per_sweep = std::pow(best_residual / probe_start, 1.0 / probe_sweeps);
-        if (per_sweep < 1.0 && std::log(params.tolerance / best_residual) / std::log(per_sweep) <= left) {
-          cur.slice = left;
+      if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status)) {
+        const double per_sweep = std::pow(best_residual / stage_start, 1.0 / r.iterations);
+        const double needed = std::log(params.tolerance / best_residual) / std::log(per_sweep);
+        // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
+        int allowance = kAutoProbeSweeps;
+        if (probe_sweeps + 2.0 * needed > allowance) allowance = probeAllowance(planned(), ctx, friction);
+        if (probe_sweeps + 2.0 * needed <= allowance) {
+          cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
+          stage_start = best_residual;
           continue;
         }
       }
-      // Not solved: the probe leaves no trace, the plan starts from the start as it would
-      // have without it (apgd from a Gauss-Seidel iterate crawled on the box pyramids: 80×).
-      best = origin;
-      best_residual = probe_start;
-      best_error = probe_start;
-      best_model = FrictionModel::kCoulombDisc;
+      // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate,
+      // and so does newton if the probe was no longer than its own warm-up; any other starts
+      // from the start as it would have without the probe (apgd from a Gauss-Seidel iterate
+      // crawled on the box pyramids: 80×; newton from 35 sweeps on a box stack stalled twice
+      // and restarted: 3.5×).
       members.clear();
-      addPlan();
+      for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
       m = 0;
+      const SolverKind first = members.front().kind;
+      const bool keep = first == SolverKind::kNlgs || first == SolverKind::kPgs ||
+                        (first == SolverKind::kNewton && probe_sweeps <= kAutoProbeSweeps);
+      if (!keep) {
+        best = origin;
+        best_residual = probe_start;
+        best_error = probe_start;
+        best_model = FrictionModel::kCoulombDisc;
+      }
       continue;
     }
     if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {

@@ -186,6 +186,27 @@ TEST(Islands, ConvergedMeansTheWholeResidualMeetsTheTolerance) {
   }
 }
 
+// auto checks a zero start on the whole problem before it splits it: each island alone is
+// held to its share of the tolerance, and the island whose start is worst would iterate.
+// The independent check: the residual of the returned (zero) forces, recomputed from W.
+TEST(Islands, AutoAcceptsAZeroStartThatMeetsTheToleranceAsAWhole) {
+  for (unsigned seed : {3u, 4u, 5u}) {
+    const Generated g = generate(4, 4, Kinds::kFrictional, seed);
+    ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(g.problem.rowCount());
+    const double start = recomputedResidual(g.problem, zero);
+    ASSERT_GT(start, 0.0);
+    const double tol = 1.01 * start;  // the whole start meets it, not every island's alone
+    const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, 100000, true));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_EQ(r.solver, "auto") << "a member ran although the start was an answer";
+    EXPECT_EQ(r.iterations, 0);
+    EXPECT_EQ(r.forces, zero);
+    EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
+    EXPECT_NEAR(r.residual, start, 1e-12 * start);
+  }
+}
+
 TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
   for (bool sparse : {false, true}) {
     Generated g = generate(40, 4, Kinds::kMixed, 9);  // > 200 rows: the pool runs

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <chrono>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +27,9 @@ struct SolveContext {
   std::vector<bool> ignored;    // contacts left out (minW, maxF): force stays zero
   double regularization = 0.0;  // r added to W's diagonal
   int body_dof = 0;             // 6 × bodies when the body form is known: auto's rank-deficiency estimate
+  // The residual of the λ a kernel is handed, when the caller already measured it (auto's
+  // check of λ = 0 on the whole problem); NaN when not known.
+  double start_residual = std::numeric_limits<double>::quiet_NaN();
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
