@@ -47,7 +47,7 @@ using Clock = std::chrono::steady_clock;
 // move from the best iterate at all gets one slice from the warm start instead. Members
 // rotate until the tolerance, maxIt
 // (summed over every slice) or time_budget (a slice gets at most half the remaining time
-// while another member is left) ends the solve.
+// while another member is left, or the plan waits behind the probe) ends the solve.
 
 constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pays off
 constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
@@ -409,7 +409,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     const Clock::time_point t0 = Clock::now();
     member.has_deadline = ctx.has_deadline;
     member.deadline = ctx.deadline;
-    if (ctx.has_deadline && members.size() > 1) {  // leave the others half of what is left
+    if (ctx.has_deadline && (members.size() > 1 || cur.probe)) {  // leave the others (the plan) half of what is left
       member.deadline = t0 + (ctx.deadline - t0) / 2;
     }
     member.problem = ctx.problem;
@@ -477,7 +477,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
       probe_sweeps += r.iterations;
-      if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status)) {
+      if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
+          r.status != SolveStatus::kTimeBudget) {
         const double per_sweep = std::pow(best_residual / stage_start, 1.0 / r.iterations);
         const double needed = std::log(params.tolerance / best_residual) / std::log(per_sweep);
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
