@@ -68,8 +68,9 @@ Problem frictionlessLcp(const Eigen::MatrixXd& W, const Eigen::VectorXd& d_free)
   return p;
 }
 
-// The path without the Gauss-Seidel probe every plan starts with (at most ten sweeps; a
-// plan that starts with Gauss-Seidel merges with it into one stage).
+// The path without the Gauss-Seidel probe every plan starts with (ten sweeps, more while
+// their rate says they finish first; a plan that starts with Gauss-Seidel merges with it
+// into one stage).
 std::string afterProbe(const SolveResult& r) {
   for (const char* probe : {"auto:nlgs->", "auto:pgs->"})
     if (r.solver.rfind(probe, 0) == 0) return "auto:" + r.solver.substr(std::string(probe).size());
