@@ -235,7 +235,6 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   // storage (W, blocks or bodies), so that the built and unbuilt solves agree on it.
   if (kind == SolverKind::kAuto && params_.stopping_rule == StoppingRule::kResidual &&
       !(pyramidModel(params_) && ctx.hasFriction()) && lambda.isZero(0.0)) {
-    zeroInactiveRows(ctx, lambda);
     const double start = naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
     if (start <= params_.tolerance) {
       KernelReport report;
