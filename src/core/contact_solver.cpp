@@ -235,7 +235,7 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   // storage (W, blocks or bodies), so that the built and unbuilt solves agree on it.
   if (kind == SolverKind::kAuto && params_.stopping_rule == StoppingRule::kResidual &&
       !(pyramidModel(params_) && ctx.hasFriction()) && lambda.isZero(0.0)) {
-    const double start = naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
+    const double start = autoStartResidual(ctx, lambda);
     if (start <= params_.tolerance) {
       KernelReport report;
       report.status = SolveStatus::kConverged;

@@ -114,13 +114,10 @@ struct Coupling {
 double normalDiagonal(const SolveContext& ctx, int i) {
   const Problem& p = *ctx.problem;
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) return (*dense)(ctx.offsets[i], ctx.offsets[i]);
-  double w = 0.0;
-  if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
-    if (i >= sparse->blockCount()) return 0.0;
-    for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b)
-      if (sparse->block_col[b] == i) w += sparse->values[sparse->value_start[b]];
-  }
-  return w;
+  const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W);
+  if (!sparse || i >= sparse->blockCount()) return 0.0;
+  const double* block = sparse->diagonalValues(i);
+  return block ? block[0] : 0.0;
 }
 
 // `redundancy`: also the share of nearly parallel normals (only the frictional plan reads it).
@@ -302,13 +299,6 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
   }
 }
 
-// The residual of the start: of λ = 0 without a product with W (d = d_free).
-double startResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
-  if (!std::isnan(ctx.start_residual)) return ctx.start_residual;
-  if (!lambda.isZero(0.0)) return ctx.residual(lambda);
-  return naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
-}
-
 bool anyIgnored(const SolveContext& ctx) {
   return std::find(ctx.ignored.begin(), ctx.ignored.end(), true) != ctx.ignored.end();
 }
@@ -328,6 +318,12 @@ SolverKind probeKind(const SolveContext& ctx, bool friction) {
 
 }  // namespace
 
+double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  if (!std::isnan(ctx.start_residual)) return ctx.start_residual;
+  if (!lambda.isZero(0.0)) return ctx.residual(lambda);
+  return naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
+}
+
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
 // pool) so that a microsecond island pays no allocation for it after the first solve: the
 // member context (its vectors assigned in place) and the iterates.
@@ -344,7 +340,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const bool friction = ctx.hasFriction();
   const bool pyramid = pyramidModel(params) && friction;
   const bool by_residual = params.stopping_rule == StoppingRule::kResidual && !pyramid;
-  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : startResidual(ctx, lambda);
+  double best_residual = pyramid ? std::numeric_limits<double>::infinity() : autoStartResidual(ctx, lambda);
   if (!std::isfinite(best_residual)) best_residual = std::numeric_limits<double>::infinity();
   if (by_residual && best_residual <= params.tolerance) {  // the (warm) start is an answer: path "auto"
     report.status = SolveStatus::kConverged;
@@ -366,6 +362,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (plan.empty()) plan = autoPlan(ctx, friction);
     return plan;
   };
+  auto startPlan = [&] {
+    members.clear();
+    for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
+  };
   // The probe runs before the features are even measured: a problem it solves pays for
   // nothing else.
   const SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
@@ -374,7 +374,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     probe.probe = true;
     members.push_back(probe);
   } else {
-    for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
+    startPlan();
   }
   const double probe_start = best_residual;
   double stage_start = best_residual;
@@ -495,8 +495,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // from the start as it would have without the probe (apgd from a Gauss-Seidel iterate
       // crawled on the box pyramids: 80×; newton from 35 sweeps on a box stack stalled twice
       // and restarted: 3.5×).
-      members.clear();
-      for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
+      startPlan();
       m = 0;
       const SolverKind first = members.front().kind;
       const bool keep = first == SolverKind::kNlgs || first == SolverKind::kPgs ||

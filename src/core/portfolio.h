@@ -16,6 +16,10 @@ namespace lcp_contact_solver::core {
 // maxIt and time_budget bound the whole path. report.stages holds each member's time.
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
+// The residual auto measures its start by (ctx.start_residual when the caller measured it; from
+// λ = 0 without a product with W, d = d_free).
+double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda);
+
 // stats.solver of an auto solve: "auto:" and the members in the order they ran.
 std::string autoPath(const std::vector<std::pair<std::string, double>>& stages);
 

@@ -49,9 +49,8 @@ constexpr int kRefreshInterval = 50;
 
 // W_ii of a block-sparse W of 1×1 blocks (0 when not stored).
 double storedDiagonal(const BlockSparseMatrix& W, int i) {
-  for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s)
-    if (W.block_col[s] == i) return W.values[W.value_start[s]];
-  return 0.0;
+  const double* block = W.diagonalValues(i);
+  return block ? block[0] : 0.0;
 }
 
 }  // namespace
