@@ -134,12 +134,26 @@ KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
     if (polygon != nullptr) report.friction_model = ctx.params->friction_model;
     return report;
   }
-  std::vector<LocalBlock> blocks;
-  if (std::string err = prepareBlocks(ctx, blocks, polygon); !err.empty()) {
-    KernelReport report;
-    report.status = SolveStatus::kZeroDiagonal;
-    report.message = err;
-    return report;
+  // The blocks depend on W's diagonal blocks, μ, the ignored contacts and r, not on λ: a
+  // caller's memo (kernels.h) forms them once for all its calls.
+  const int facets = polygon != nullptr ? polygon->facets : 0;
+  GaussSeidelMemo* memo = ctx.gs_memo;
+  std::vector<LocalBlock> own;
+  std::vector<LocalBlock>& blocks = memo != nullptr ? memo->blocks : own;
+  if (memo == nullptr || memo->problem != ctx.problem || memo->regularization != ctx.regularization ||
+      memo->facets != facets) {
+    if (memo != nullptr) memo->clear();
+    if (std::string err = prepareBlocks(ctx, blocks, polygon); !err.empty()) {
+      KernelReport report;
+      report.status = SolveStatus::kZeroDiagonal;
+      report.message = err;
+      return report;
+    }
+    if (memo != nullptr) {
+      memo->problem = ctx.problem;
+      memo->regularization = ctx.regularization;
+      memo->facets = facets;
+    }
   }
   if (const BodyCompliance* bodies = ctx.problem->bodies.get()) {  // build_lcp = false
     BodyAccess access(*bodies, ctx);

@@ -392,3 +392,16 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
                           const FrictionPolygon* polygon = nullptr);
 
 }  // namespace lcp_contact_solver::core::local_laws
+
+namespace lcp_contact_solver::core {
+
+// kernels.h: the blocks of one problem, regularization and polygon (facets; 0 for the disc).
+struct GaussSeidelMemo {
+  const Problem* problem = nullptr;  // none: empty
+  double regularization = 0.0;
+  int facets = 0;
+  std::vector<local_laws::LocalBlock> blocks;
+  void clear() { problem = nullptr; }
+};
+
+}  // namespace lcp_contact_solver::core

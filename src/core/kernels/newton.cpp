@@ -47,6 +47,7 @@
 // where Gauss-Seidel stalls; each iteration is far more expensive than a sweep.
 #include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "local_contact_laws.h"
 #include "newton_symmetric.h"
 
 #include <Eigen/LU>
@@ -378,6 +379,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   warm_params.stopping_rule = StoppingRule::kResidual;
   SolveContext warm_ctx = ctx;
   warm_ctx.params = &warm_params;
+  GaussSeidelMemo own_memo;  // the warm-up's blocks serve every burst
+  if (warm_ctx.gs_memo == nullptr) warm_ctx.gs_memo = &own_memo;
   const Eigen::VectorXd start = lambda;
   const KernelReport warm = runNonlinearGaussSeidel(warm_ctx, lambda);
   int warm_sweeps = 0;
@@ -421,7 +424,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   SolverParams burst_params = warm_params;
-  SolveContext burst_ctx = ctx;
+  SolveContext burst_ctx = warm_ctx;
   burst_ctx.params = &burst_params;
   report.status = SolveStatus::kMaxIterations;
   for (;;) {

@@ -91,6 +91,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   SolveContext inner = ctx;
   inner.problem = &sub;
   inner.params = &inner_params;
+  inner.gs_memo = nullptr;  // r + σ changes at every proximal step: nothing to keep
 
   const double scale = meanDiagonal(problem, ctx.regularization);
   double sigma = kSigmaStart * scale;

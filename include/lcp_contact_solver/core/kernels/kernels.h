@@ -16,6 +16,12 @@
 
 namespace lcp_contact_solver::core {
 
+// The per-contact data the Gauss-Seidel kernels form from W alone (local_contact_laws.h),
+// kept by a caller that runs them several times on one problem: auto's probe stages and
+// slices, newton's warm-up and bursts. Its owner clears it whenever the problem, μ, the
+// ignored contacts or the regularization may have changed.
+struct GaussSeidelMemo;
+
 // Everything a kernel needs, computed once per solve.
 struct SolveContext {
   // With Problem::bodies (the unbuilt solve) only the Gauss-Seidel kernels run; ContactSolver
@@ -30,6 +36,7 @@ struct SolveContext {
   // The residual of the λ a kernel is handed, when the caller already measured it (auto's
   // check of λ = 0 on the whole problem); NaN when not known.
   double start_residual = std::numeric_limits<double>::quiet_NaN();
+  GaussSeidelMemo* gs_memo = nullptr;  // see above; none: each call forms its own
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
