@@ -1,6 +1,7 @@
 #include "portfolio.h"
 
 #include "kernel_dispatch.h"
+#include "kernels/local_contact_laws.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/residual.h"
@@ -109,6 +110,12 @@ struct Coupling {
   double redundant = 0.0;
 };
 
+int activeContacts(const SolveContext& ctx) {
+  int n = 0;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) n += ctx.ignored[i] ? 0 : 1;
+  return n;
+}
+
 // W_nn of contact i: its first diagonal entry (a block-sparse W's stored diagonal block; 0
 // when none is stored). The body form has no W: 0.
 double normalDiagonal(const SolveContext& ctx, int i) {
@@ -177,10 +184,39 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   return c;
 }
 
+// κ >= `kappa` on a block-sparse W, read row by row only until that is known (the terms are
+// not negative): an LCP's plan reads only κ < kAutoStrongDominant, and on MuJoCo's steps
+// (strongly coupled humanoids) normalCoupling's full pass cost a quarter of newton's solve.
+bool sparseCouplingReaches(const SolveContext& ctx, const BlockSparseMatrix& W, double kappa) {
+  const int nc = std::min(static_cast<int>(ctx.problem->contacts.size()), W.blockCount());
+  const double enough = kappa * activeContacts(ctx);
+  double partial = 0.0;
+  for (int i = 0; i < nc; ++i) {
+    if (ctx.ignored[i]) continue;
+    double diag = 0.0, off = 0.0;
+    for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+      const int j = W.block_col[b];
+      const double w = W.values[W.value_start[b]];
+      if (j == i) diag = w;  // as diagonalValues: the last stored diagonal block
+      else if (!ctx.ignored[j]) off += std::abs(w);
+    }
+    if (diag > 0.0) partial += off / diag;  // as normalCoupling: a row without diagonal adds nothing
+    if (partial >= enough) return true;
+  }
+  return false;
+}
+
 AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
+  f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
+  if (!friction && f.sparse && f.rows <= kAutoLemkeRows &&
+      sparseCouplingReaches(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant)) {
+    f.coupling = kAutoStrongDominant;  // a lower bound: all the plan reads (newton first)
+    f.symmetric = true;                // presumed (below)
+    return f;
+  }
   if (!f.body_form) {
     const Coupling c = normalCoupling(ctx, friction);
     f.coupling = c.kappa;
@@ -188,7 +224,6 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
     f.positive_diagonal = c.positive_diagonal;
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
   }
-  f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
   if (!friction && !f.body_form && f.rows <= kAutoLemkeRows) {
     // A block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed
     // symmetric: comparing every island's blocks cost as much as newton's whole solve on
@@ -213,12 +248,6 @@ bool positiveDiagonal(const SolveContext& ctx) {
     if (!(normalDiagonal(ctx, static_cast<int>(i)) + ctx.regularization > 0.0)) return false;
   }
   return true;
-}
-
-int activeContacts(const SolveContext& ctx) {
-  int n = 0;
-  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) n += ctx.ignored[i] ? 0 : 1;
-  return n;
 }
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
@@ -309,10 +338,10 @@ bool anyIgnored(const SolveContext& ctx) {
 SolverKind probeKind(const SolveContext& ctx, bool friction) {
   if (hasExtendedFriction(*ctx.problem)) return SolverKind::kAuto;
   if (friction && pyramidModel(*ctx.params)) return SolverKind::kAuto;
-  if (!ctx.problem->bodies && !positiveDiagonal(ctx)) return SolverKind::kAuto;
   // A block-sparse LCP is presumed symmetric (below): newton's active-set path, a few
   // Cholesky steps, is what the probe would delay (MuJoCo's pyramidal steps: +10..40 %).
   if (!friction && std::holds_alternative<BlockSparseMatrix>(ctx.problem->W)) return SolverKind::kAuto;
+  if (!ctx.problem->bodies && !positiveDiagonal(ctx)) return SolverKind::kAuto;
   return friction ? SolverKind::kNlgs : SolverKind::kPgs;
 }
 
@@ -330,6 +359,7 @@ double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda)
 struct Workspace {
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
+  GaussSeidelMemo gs_memo;  // the probe's blocks serve every later Gauss-Seidel slice
 };
 
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
@@ -390,6 +420,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   thread_local Workspace work;
   SolveContext& member = work.member;
   member = ctx;  // each slice changes its limits only
+  work.gs_memo.clear();
+  member.gs_memo = &work.gs_memo;
   Eigen::VectorXd& best = work.best;
   Eigen::VectorXd& x = work.x;
   Eigen::VectorXd& returned_rows = work.returned_rows;
