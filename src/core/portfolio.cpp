@@ -39,7 +39,8 @@ using Clock = std::chrono::steady_clock;
 // fraction of a Newton step's cost. Otherwise a Gauss-Seidel plan goes on from the probe's
 // iterate, newton too if the probe was no longer than its own warm-up, and any other plan
 // starts from the start, as it would have without the probe.
-// Then each member runs in slices of iterations from the best iterate so far: a slice that
+// Then each member runs in slices of iterations from the best iterate so far (the Gauss-Seidel
+// blocks formed once, an apgd slice resuming the last one's momentum: kernels.h memos): a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
 // zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
@@ -364,6 +365,7 @@ struct Workspace {
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
   GaussSeidelMemo gs_memo;  // the probe's blocks serve every later Gauss-Seidel slice
+  ApgdMemo apgd_memo;       // an apgd slice resumes the last one when handed its answer back
 };
 
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
@@ -426,6 +428,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   member = ctx;  // each slice changes its limits only
   work.gs_memo.clear();
   member.gs_memo = &work.gs_memo;
+  work.apgd_memo.clear();
+  member.apgd_memo = &work.apgd_memo;
   Eigen::VectorXd& best = work.best;
   Eigen::VectorXd& x = work.x;
   Eigen::VectorXd& returned_rows = work.returned_rows;

@@ -5,6 +5,7 @@
 #include "solvers_test_util.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <gtest/gtest.h>
@@ -385,6 +386,57 @@ TEST(Portfolio, ProxIsANamedSolver) {
   EXPECT_TRUE(r.stages.empty());
   ASSERT_TRUE(r.converged) << r.message;
   EXPECT_LE(recomputedResidual(p, r), 1e-10);
+}
+
+// auto runs apgd in slices; handed back exactly what a slice returned, the next one resumes
+// that slice's momentum, step and shift (ApgdMemo), so two slices are one long run. Checked
+// against a single run of the same length, and against a restart (which must differ, or the
+// check would prove nothing).
+TEST(Portfolio, ApgdSlicesResumeAsOneLongRun) {
+  Problem p = boxStack(4, 4, 100.0, 0.5, 0.8);
+  SolverParams sp = params(SolverKind::kApgd, 1e-14, 80);
+  SolveContext ctx;
+  ctx.problem = &p;
+  ctx.params = &sp;
+  ctx.offsets = p.rowOffsets();
+  ctx.mu = effectiveMu(p, sp.mu);
+  ctx.ignored.assign(p.contacts.size(), false);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(p.rowCount());
+
+  Eigen::VectorXd whole = zero;  // one run of 80 iterations
+  const KernelReport one = runApgd(ctx, whole);
+  ASSERT_EQ(one.status, SolveStatus::kMaxIterations) << "the case must not converge in 80 iterations";
+
+  sp.maxIt = 40;
+  Eigen::VectorXd restarted = zero;  // two slices without the memo
+  runApgd(ctx, restarted);
+  runApgd(ctx, restarted);
+
+  ApgdMemo memo;
+  ctx.apgd_memo = &memo;
+  Eigen::VectorXd sliced = zero;  // two slices with it
+  const KernelReport first = runApgd(ctx, sliced);
+  EXPECT_EQ(first.iterations, 40);
+  const KernelReport second = runApgd(ctx, sliced);
+  EXPECT_EQ(second.iterations, 40);
+
+  const double scale = whole.norm();
+  ASSERT_GT(scale, 0.0);
+  EXPECT_LE((sliced - whole).norm(), 1e-12 * scale) << "the second slice did not resume the first";
+  EXPECT_GT((restarted - whole).norm(), 1e-9 * scale) << "a restart changes nothing here: no evidence";
+  // The answer is the residual's best over both slices, recomputed from λ alone.
+  Eigen::VectorXd d;
+  ctx.computeD(sliced, d);
+  EXPECT_NEAR(naturalMapResidual(p, ctx.mu, sliced, d, ctx.ignored), second.solver_error,
+              1e-12 * std::max(1.0, second.solver_error));
+  EXPECT_LE(second.solver_error, first.solver_error);
+
+  // Handed anything else, apgd starts afresh: the memo only resumes its own answer.
+  Eigen::VectorXd other = 0.5 * sliced, fresh = 0.5 * sliced;
+  runApgd(ctx, other);
+  ctx.apgd_memo = nullptr;
+  runApgd(ctx, fresh);
+  EXPECT_EQ(other, fresh);
 }
 
 }  // namespace

@@ -22,6 +22,19 @@ namespace lcp_contact_solver::core {
 // ignored contacts or the regularization may have changed.
 struct GaussSeidelMemo;
 
+// APGD's state at the end of a call (apgd.cpp): iterate, extrapolated point, momentum, step
+// and shift. A caller that hands apgd back exactly the λ it returned (auto's next slice of
+// it) resumes the method there instead of restarting its momentum and its curvature
+// estimate. Same ownership rule as GaussSeidelMemo.
+struct ApgdMemo {
+  const Problem* problem = nullptr;  // none: empty
+  double regularization = 0.0;
+  Eigen::VectorXd returned;  // the λ the call returned (its best iterate)
+  Eigen::VectorXd x, Wx, y, Wy, shift;
+  double theta = 1.0, L = 0.0;
+  void clear() { problem = nullptr; }
+};
+
 // Everything a kernel needs, computed once per solve.
 struct SolveContext {
   // With Problem::bodies (the unbuilt solve) only the Gauss-Seidel kernels run; ContactSolver
@@ -37,6 +50,7 @@ struct SolveContext {
   // check of λ = 0 on the whole problem); NaN when not known.
   double start_residual = std::numeric_limits<double>::quiet_NaN();
   GaussSeidelMemo* gs_memo = nullptr;  // see above; none: each call forms its own
+  ApgdMemo* apgd_memo = nullptr;       // see above; none: each call starts afresh
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
