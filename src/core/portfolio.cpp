@@ -212,7 +212,8 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
-  if (!friction && f.sparse && f.rows <= kAutoLemkeRows &&
+  if (!friction && f.rows > kAutoLemkeRows) return f;  // the plan reads only the size there
+  if (!friction && f.sparse &&
       sparseCouplingReaches(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant)) {
     f.coupling = kAutoStrongDominant;  // a lower bound: all the plan reads (newton first)
     f.symmetric = true;                // presumed (below)

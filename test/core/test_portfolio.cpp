@@ -388,6 +388,32 @@ TEST(Portfolio, ProxIsANamedSolver) {
   EXPECT_LE(recomputedResidual(p, r), 1e-10);
 }
 
+// A caller may solve the same Problem object again after changing W in place (a node reusing
+// its buffers): what auto kept from the last solve (Gauss-Seidel blocks, apgd's state) must not
+// leak into the next. Checked against the same solves on fresh copies, on a frictional problem
+// (the block sweep) and on a block-sparse LCP of one-row contacts (the scalar-row sweep).
+TEST(Portfolio, NothingKeptFromTheLastSolveOfAChangedProblem) {
+  Problem frictional = boxStack(3, 4, 10.0, 0.5, 0.8);
+  Problem lcp = hard::toBlockSparse(frictionlessLcp(
+      (Eigen::MatrixXd(3, 3) << 4.0, 0.3, 0.1, 0.3, 4.0, 0.3, 0.1, 0.3, 4.0).finished(), Eigen::Vector3d(-1.0, -0.5, 0.2)));
+  for (Problem* p : {&frictional, &lcp}) {
+    const SolverParams sp = params(SolverKind::kAuto, 1e-9, 100000);
+    const SolveResult before = solveProblem(*p, sp);
+    ASSERT_TRUE(before.converged) << before.solver << ": " << before.message;
+    // Stiffer contacts: every diagonal block of W changes, the object stays.
+    if (auto* dense = std::get_if<Eigen::MatrixXd>(&p->W)) dense->diagonal() *= 3.0;
+    else for (double& v : std::get<BlockSparseMatrix>(p->W).values) v *= 3.0;
+    const Problem copy = *p;
+    const SolveResult again = solveProblem(*p, sp);
+    const SolveResult fresh = solveProblem(copy, sp);
+    ASSERT_TRUE(again.converged) << again.solver << ": " << again.message;
+    EXPECT_EQ(again.solver, fresh.solver);
+    EXPECT_EQ(again.forces, fresh.forces);
+    EXPECT_LE(recomputedResidual(*p, again), 1e-9);
+    EXPECT_GT((again.forces - before.forces).cwiseAbs().maxCoeff(), 1e-6) << "W's change must change the answer";
+  }
+}
+
 // auto runs apgd in slices; handed back exactly what a slice returned, the next one resumes
 // that slice's momentum, step and shift (ApgdMemo), so two slices are one long run. Checked
 // against a single run of the same length, and against a restart (which must differ, or the

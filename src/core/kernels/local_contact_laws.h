@@ -11,6 +11,7 @@
 #include "friction_pyramid.h"
 
 #include "lcp_contact_solver/core/kernels/kernels.h"
+#include "lcp_contact_solver/core/kernels/scalar_rows.h"
 #include "lcp_contact_solver/core/residual.h"
 
 #include <Eigen/Core>
@@ -395,13 +396,21 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
 
 namespace lcp_contact_solver::core {
 
-// kernels.h: the blocks of one problem, regularization and polygon (facets; 0 for the disc).
+// kernels.h: the blocks of one problem, regularization and polygon (facets; 0 for the disc),
+// and for one-row contacts the scalar-row sweep's data (scalar_rows.h).
 struct GaussSeidelMemo {
-  const Problem* problem = nullptr;  // none: empty
+  const Problem* problem = nullptr;  // none: no blocks
   double regularization = 0.0;
   int facets = 0;
   std::vector<local_laws::LocalBlock> blocks;
-  void clear() { problem = nullptr; }
+
+  const Problem* rows_problem = nullptr;  // none: no scalar rows
+  double rows_regularization = 0.0;
+  ScalarRows columns;               // W's columns
+  std::vector<double> inverse;      // 1 / (W_ii + r)
+  std::vector<std::uint8_t> kind;   // each row's kind (scalar_rows.cpp)
+
+  void clear() { problem = rows_problem = nullptr; }
 };
 
 }  // namespace lcp_contact_solver::core

@@ -1,5 +1,7 @@
 #include "lcp_contact_solver/core/kernels/scalar_rows.h"
 
+#include "local_contact_laws.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -75,31 +77,46 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
   const double omega = params.sor;
   KernelReport report;
 
-  std::vector<double> inverse(n, 0.0);
-  std::vector<std::uint8_t> kind(n, kSkipRow);
-  for (int i = 0; i < n; ++i) {
-    if (!ctx.ignored.empty() && ctx.ignored[i]) continue;
-    const Contact& c = problem.contacts[i];
-    const double D = storedDiagonal(W, i) + r;
-    auto fail = [&](const std::string& what) {
-      report.status = SolveStatus::kZeroDiagonal;
-      report.message = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ") " + what;
-      return report;
-    };
-    if (c.type == ContactType::kBilateral) {
-      if (D == 0.0 || !std::isfinite(D)) return fail("has a singular bilateral block of W");
-      kind[i] = kBilateralRow;
-    } else {
-      if (!(D > 0.0)) {
-        char value[32];
-        std::snprintf(value, sizeof(value), "%.6g", D);
-        return fail(std::string("has W_nn = ") + value + " <= 0; set minW or regularizationTerm");
+  // Each row's kind, 1 / (W_ii + r) and W's columns depend on W, the ignored rows and r, not
+  // on λ: a caller's memo (kernels.h) forms them once for all its calls.
+  GaussSeidelMemo* memo = ctx.gs_memo;
+  GaussSeidelMemo own;
+  GaussSeidelMemo& rows = memo != nullptr ? *memo : own;
+  if (memo == nullptr || memo->rows_problem != ctx.problem || memo->rows_regularization != r) {
+    rows.rows_problem = nullptr;
+    std::vector<double>& inverse = rows.inverse;
+    std::vector<std::uint8_t>& kind = rows.kind;
+    inverse.assign(n, 0.0);
+    kind.assign(n, kSkipRow);
+    for (int i = 0; i < n; ++i) {
+      if (!ctx.ignored.empty() && ctx.ignored[i]) continue;
+      const Contact& c = problem.contacts[i];
+      const double D = storedDiagonal(W, i) + r;
+      auto fail = [&](const std::string& what) {
+        report.status = SolveStatus::kZeroDiagonal;
+        report.message = "contact " + std::to_string(i) + " (id " + std::to_string(c.id) + ") " + what;
+        return report;
+      };
+      if (c.type == ContactType::kBilateral) {
+        if (D == 0.0 || !std::isfinite(D)) return fail("has a singular bilateral block of W");
+        kind[i] = kBilateralRow;
+      } else {
+        if (!(D > 0.0)) {
+          char value[32];
+          std::snprintf(value, sizeof(value), "%.6g", D);
+          return fail(std::string("has W_nn = ") + value + " <= 0; set minW or regularizationTerm");
+        }
+        kind[i] = kUnilateralRow;
       }
-      kind[i] = kUnilateralRow;
+      inverse[i] = 1.0 / D;
     }
-    inverse[i] = 1.0 / D;
+    rows.columns = scalarColumnsOf(W);
+    rows.rows_problem = ctx.problem;
+    rows.rows_regularization = r;
   }
-  const ScalarRows columns = scalarColumnsOf(W);
+  const std::vector<double>& inverse = rows.inverse;
+  const std::vector<std::uint8_t>& kind = rows.kind;
+  const ScalarRows& columns = rows.columns;
   const int* start = columns.start.data();
   const int* index = columns.index.data();
   const double* value = columns.value.data();
