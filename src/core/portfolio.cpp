@@ -142,8 +142,9 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (j < i) lower_sum[i] += std::abs(w);
+    // |w| >= kAutoRedundant √(W_ii W_jj), squared: no square root per pair of a dense W.
     if (redundancy && diag[i] > 0.0 && diag[j] > 0.0 &&
-        std::abs(w) >= kAutoRedundant * std::sqrt(diag[i] * diag[j]))
+        w * w >= kAutoRedundant * kAutoRedundant * diag[i] * diag[j])
       redundant[i] = 1;
   };
   if (dense) {
