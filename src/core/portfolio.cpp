@@ -128,6 +128,20 @@ double normalDiagonal(const SolveContext& ctx, int i) {
   return block ? block[0] : 0.0;
 }
 
+// Gauss-Seidel can start: every active contact has a positive normal diagonal.
+bool positiveDiagonal(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  const int nc = static_cast<int>(p.contacts.size());
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {  // the storage resolved once
+    for (int i = 0; i < nc; ++i)
+      if (!ctx.ignored[i] && !((*dense)(ctx.offsets[i], ctx.offsets[i]) + ctx.regularization > 0.0)) return false;
+    return true;
+  }
+  for (int i = 0; i < nc; ++i)
+    if (!ctx.ignored[i] && !(normalDiagonal(ctx, i) + ctx.regularization > 0.0)) return false;
+  return true;
+}
+
 // `redundancy`: also the share of nearly parallel normals (only the frictional plan reads it).
 Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   const Problem& p = *ctx.problem;
@@ -186,13 +200,15 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   return c;
 }
 
-// κ >= `kappa` on a block-sparse W, read row by row only until that is known (the terms are
-// not negative): an LCP's plan reads only κ < kAutoStrongDominant, and on MuJoCo's steps
-// (strongly coupled humanoids) normalCoupling's full pass cost a quarter of newton's solve.
-bool sparseCouplingReaches(const SolveContext& ctx, const BlockSparseMatrix& W, double kappa) {
+// normalCoupling's κ on a block-sparse W, read row by row only until it is known to reach
+// `enough` (the terms are not negative): then a lower bound >= `enough`. An LCP's plan reads
+// only κ < kAutoStrongDominant, and on MuJoCo's steps (strongly coupled humanoids) the full
+// pass cost a quarter of newton's solve. Same rows, terms and order as normalCoupling.
+double sparseCoupling(const SolveContext& ctx, const BlockSparseMatrix& W, double enough) {
   const int nc = std::min(static_cast<int>(ctx.problem->contacts.size()), W.blockCount());
-  const double enough = kappa * activeContacts(ctx);
-  double partial = 0.0;
+  const double stop = enough * activeContacts(ctx);  // activeContacts >= the rows summed below
+  double sum = 0.0;
+  int active = 0;
   for (int i = 0; i < nc; ++i) {
     if (ctx.ignored[i]) continue;
     double diag = 0.0, off = 0.0;
@@ -202,10 +218,12 @@ bool sparseCouplingReaches(const SolveContext& ctx, const BlockSparseMatrix& W, 
       if (j == i) diag = w;  // as diagonalValues: the last stored diagonal block
       else if (!ctx.ignored[j]) off += std::abs(w);
     }
-    if (diag > 0.0) partial += off / diag;  // as normalCoupling: a row without diagonal adds nothing
-    if (partial >= enough) return true;
+    if (diag <= 0.0) continue;  // as normalCoupling: a row without diagonal adds nothing
+    sum += off / diag;
+    ++active;
+    if (sum >= stop) return sum / active;
   }
-  return false;
+  return active > 0 ? sum / active : 0.0;
 }
 
 AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) {
@@ -214,10 +232,10 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
   f.body_form = static_cast<bool>(ctx.problem->bodies);
   f.sparse = std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !f.body_form;
   if (!friction && f.rows > kAutoLemkeRows) return f;  // the plan reads only the size there
-  if (!friction && f.sparse &&
-      sparseCouplingReaches(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant)) {
-    f.coupling = kAutoStrongDominant;  // a lower bound: all the plan reads (newton first)
-    f.symmetric = true;                // presumed (below)
+  if (!friction && f.sparse) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
+    f.coupling = sparseCoupling(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant);
+    f.positive_diagonal = f.coupling < kAutoStrongDominant && positiveDiagonal(ctx);  // else unread
+    f.symmetric = true;  // presumed (below)
     return f;
   }
   if (!f.body_form) {
@@ -243,19 +261,6 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
   return f;
 }
 
-// Gauss-Seidel can start: every active contact has a positive normal diagonal.
-bool positiveDiagonal(const SolveContext& ctx) {
-  const Problem& p = *ctx.problem;
-  const int nc = static_cast<int>(p.contacts.size());
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {  // the storage resolved once
-    for (int i = 0; i < nc; ++i)
-      if (!ctx.ignored[i] && !((*dense)(ctx.offsets[i], ctx.offsets[i]) + ctx.regularization > 0.0)) return false;
-    return true;
-  }
-  for (int i = 0; i < nc; ++i)
-    if (!ctx.ignored[i] && !(normalDiagonal(ctx, i) + ctx.regularization > 0.0)) return false;
-  return true;
-}
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
 std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction) {
