@@ -31,10 +31,11 @@
 // are right but can crawl while they change. So it starts from 20 nlgs sweeps (or
 // residual 1e-3), and whenever 10 Newton steps fail to halve the residual, up to 100
 // nlgs sweeps from the best iterate (or a tenfold decrease) move the states on before
-// Newton resumes. A warm-started solve that stalls a second time restarts once from
-// λ = 0; one whose best residual has not halved over five such rounds stops with
-// numerical_failure (a floor of its own, not worth the rest of the budget). Iterations
-// count Newton steps plus nlgs sweeps.
+// Newton resumes; three full steps in a row that barely move the residual get ten such
+// sweeps at once, kept only if they reach the tenfold decrease. A warm-started solve that
+// stalls a second time restarts once from λ = 0; one whose best residual has not halved
+// over five such rounds stops with numerical_failure (a floor of its own, not worth the
+// rest of the budget). Iterations count Newton steps plus nlgs sweeps.
 //
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
@@ -81,6 +82,11 @@ constexpr int kStallWindow = 10;
 constexpr double kStallFactor = 0.5;
 constexpr int kBurstSweeps = 100;
 constexpr double kBurstReduction = 0.1;
+// Stagnation: kStagnantSteps full Newton steps in a row, each lowering the residual by
+// less than 1 %, get a burst of up to kStagnantBurstSweeps sweeps (below).
+constexpr double kStagnation = 0.99;
+constexpr int kStagnantSteps = 3;
+constexpr int kStagnantBurstSweeps = 10;
 // A warm-started solve that stalls this often restarts once from λ = 0.
 constexpr std::size_t kStallsBeforeColdStart = 2;
 // Giving up: when the best residual has not halved over this many stalls (each 10 Newton
@@ -423,10 +429,36 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
+  double previous_residual = std::numeric_limits<double>::infinity();
+  int stagnant_steps = 0;
+  bool stagnation_burst_tried = false;
+  double previous_epsilon = kRegularizationMax;
   SolverParams burst_params = warm_params;
   SolveContext burst_ctx = warm_ctx;
   burst_ctx.params = &burst_params;
   report.status = SolveStatus::kMaxIterations;
+  // Up to max_sweeps nlgs sweeps from the best iterate; false when the budget ran out.
+  double burst_residual = std::numeric_limits<double>::infinity();
+  auto burst = [&](int max_sweeps) {
+    lambda = best;
+    burst_params.tolerance = std::max(params.tolerance, kBurstReduction * best_residual);
+    burst_params.maxIt = std::min(max_sweeps, params.maxIt - newton_steps - sweeps);
+    const KernelReport r = runNonlinearGaussSeidel(burst_ctx, lambda);
+    burst_residual = r.solver_error;
+    sweeps += r.iterations;
+    report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    if (r.status == SolveStatus::kZeroDiagonal || r.status == SolveStatus::kNumericalFailure) {
+      nlgs_usable = false;
+      lambda = best;
+    }
+    if (r.status == SolveStatus::kTimeBudget) {
+      report.status = SolveStatus::kTimeBudget;
+      report.message = r.message;
+      return false;
+    }
+    c_reg = kRegularizationStart;
+    return true;
+  };
   for (;;) {
     applyW(lambda, u);
     u += problem.d_free;
@@ -456,8 +488,12 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // does not (active set still changing, kinks, tiny steps), a burst of nlgs sweeps
     // from the best iterate moves the contact states, then Newton resumes.
     if (since_checkpoint == 0) checkpoint_residual = residual;
+    const bool flat = residual >= kStagnation * previous_residual && previous_epsilon <= kRegularizationMin;
+    stagnant_steps = flat ? stagnant_steps + 1 : 0;
+    previous_residual = residual;
     if (since_checkpoint >= kStallWindow) {
       since_checkpoint = 0;
+      stagnation_burst_tried = false;
       const bool stalled = residual > kStallFactor * checkpoint_residual;
       if (stalled) {
         best_at_stall.push_back(best_residual);
@@ -488,31 +524,36 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         continue;
       }
       if (stalled && nlgs_usable) {
-        lambda = best;
-        burst_params.tolerance = std::max(params.tolerance, kBurstReduction * best_residual);
-        burst_params.maxIt = std::min(kBurstSweeps, params.maxIt - newton_steps - sweeps);
-        const KernelReport burst = runNonlinearGaussSeidel(burst_ctx, lambda);
-        sweeps += burst.iterations;
-        report.history.insert(report.history.end(), burst.history.begin(), burst.history.end());
-        if (burst.status == SolveStatus::kZeroDiagonal || burst.status == SolveStatus::kNumericalFailure) {
-          nlgs_usable = false;
-          lambda = best;
-        }
-        if (burst.status == SolveStatus::kTimeBudget) {
-          report.status = SolveStatus::kTimeBudget;
-          report.message = burst.message;
-          break;
-        }
-        c_reg = kRegularizationStart;
+        if (!burst(kBurstSweeps)) break;
         continue;
       }
       checkpoint_residual = residual;
+    }
+    // Stagnation: full steps (ε at its floor) that no longer move the residual sit on a
+    // kink or a singular direction of J. A short burst is tried at once instead of waiting
+    // out the window (box pyramids: 16 such steps, then one sweep met the tolerance). It is
+    // kept only if it reaches its tenfold decrease; otherwise it is undone (Newton's iterate
+    // and ε restored: where Newton escapes by itself, as on OneObject, a half-way burst sent
+    // it elsewhere and doubled the solve) and not tried again before the next window. Not a
+    // stall: the window's counters (cold start, giving up) are unchanged.
+    if (stagnant_steps >= kStagnantSteps && nlgs_usable && !stagnation_burst_tried) {
+      stagnant_steps = 0;
+      trial = lambda;
+      const double kept_c_reg = c_reg;
+      if (!burst(kStagnantBurstSweeps)) break;
+      if (!(burst_residual <= kBurstReduction * best_residual)) {
+        lambda = trial;
+        c_reg = kept_c_reg;
+        stagnation_burst_tried = true;
+      }
+      continue;
     }
     ++since_checkpoint;
     ++newton_steps;
     const double merit = evaluate(contacts, lambda, u, phi, &blocks);
     const double epsilon =
         std::clamp(c_reg * std::min(1.0, residual), kRegularizationMin, kRegularizationMax);
+    previous_epsilon = epsilon;
     bool stepped = false;
     if (system->factorize(contacts, blocks, epsilon)) {
       rhs = -phi;
