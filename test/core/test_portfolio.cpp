@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace lcp_contact_solver::core {
@@ -259,6 +260,63 @@ TEST(Portfolio, FirstMemberFollowsTheFeatures) {
   const SolveResult t = solveProblem(torsional, params(SolverKind::kAuto, 1e-10, 1000));
   EXPECT_EQ(t.solver, "auto:nlgs");
   EXPECT_TRUE(t.converged) << t.message;
+}
+
+// A wall of balls (radius 0.1) stacked as a triangle, `base` on the ground: each ball above rests
+// on the two below it, one contact per pair of touching bodies.
+Problem ballTriangle(int base, double mu) {
+  World w;
+  const double r = 0.1;
+  std::vector<std::vector<int>> layers(base);
+  for (int k = 0; k < base; ++k) {
+    for (int i = 0; i < base - k; ++i) {
+      const Eigen::Vector3d com(2.0 * r * i + r * k, 0.0, r + k * r * std::sqrt(3.0));
+      const int ball = w.add(hard::box(1.0, Eigen::Vector3d::Constant(2.0 * r), com));
+      layers[k].push_back(ball);
+      if (k == 0) w.contact(ball, -1, Eigen::Vector3d(com.x(), 0.0, 0.0), Eigen::Vector3d::UnitZ(), mu);
+      for (int s = 0; k > 0 && s < 2; ++s) {
+        const int below = layers[k - 1][i + s];
+        const Eigen::Vector3d n = (com - w.bodies[below].com).normalized();
+        w.contact(ball, below, w.bodies[below].com + r * n, n, mu);
+      }
+    }
+  }
+  return w.problem();
+}
+
+// Down to 1e-4 Gauss-Seidel goes before apgd unless contacts are multi-point (several
+// between the same bodies: rows beyond their degrees of freedom), where its rate collapses.
+// Both problems have over 200 rows (apgd first before the feature) and Gauss-Seidel needs more
+// sweeps than the probe's allowance before apgd, so the path shows the plan; each answer is
+// checked against Coulomb's law from the forces.
+TEST(Portfolio, GaussSeidelFirstAtModerateToleranceUnlessContactsAreMultiPoint) {
+  const Problem balls = ballTriangle(10, 0.5);  // 300 rows, one contact per pair of bodies
+  const Problem stack = boxStack(18, 4, 1.0, 0.5, 0.8);  // 216 rows, four points per face
+  for (double tol : {1e-3, 1e-4}) {
+    const SolveResult nlgs = solveProblem(balls, params(SolverKind::kNlgs, tol, 100000));
+    ASSERT_TRUE(nlgs.converged) << nlgs.message;
+    ASSERT_GT(nlgs.iterations, 50) << tol;  // beyond the probe's allowance before apgd
+    const SolveResult r = solveProblem(balls, params(SolverKind::kAuto, tol, 100000));
+    ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+    EXPECT_EQ(r.solver, "auto:nlgs") << tol;
+    EXPECT_EQ(r.iterations, nlgs.iterations) << tol;  // the probe's sweeps and nlgs's are one run
+    EXPECT_LE(recomputedResidual(balls, r), tol);
+    SolverParams traced = params(SolverKind::kAuto, tol, 100000);
+    traced.displayDebug = true;  // residual histories: the probe's sweeps, then each member's
+    const SolveResult s = solveProblem(stack, traced);
+    ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
+    EXPECT_LE(recomputedResidual(stack, s), tol);
+    // apgd ran from the start after at most the probe's 50 sweeps: its first slice (200
+    // iterations) is apgd's own run, residual for residual. An nlgs plan sweeps 100 first.
+    traced.solver = SolverKind::kApgd;
+    const SolveResult apgd = solveProblem(stack, traced);
+    ASSERT_GT(apgd.residual_history.size(), 200u);
+    bool apgd_after_probe = false;
+    for (std::size_t k = 1; k <= 50 && k + 200 <= s.residual_history.size() && !apgd_after_probe; ++k)
+      apgd_after_probe = std::equal(apgd.residual_history.begin(), apgd.residual_history.begin() + 200,
+                                    s.residual_history.begin() + static_cast<long>(k));
+    EXPECT_TRUE(apgd_after_probe) << s.solver << " at " << tol;
+  }
 }
 
 // Four frictional contacts whose normal rows couple their neighbours (κ = 0.3: above the
