@@ -33,7 +33,8 @@ using Clock = std::chrono::steady_clock;
 // 6 DoF each when the body form is known, else a quarter of the contacts with a nearly
 // parallel partner) and multi-point contacts (a quarter of the contacts in groups of three or
 // more coupled to exactly the same contacts: several points between the same bodies), which
-// decide between Gauss-Seidel and apgd down to 1e-4. The start is measured first: a
+// decide between Gauss-Seidel and apgd down to 1e-4 and put an apgd scout before a planned
+// newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, then stage by
 // stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
@@ -75,6 +76,16 @@ constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep:
 constexpr int kAutoProbeFirst = 3;  // then stage by stage while their rate reaches the tolerance
 constexpr int kAutoProbeSweeps = 10;  // before the plan is measured; newton's own warm-up is as long
 constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
+// Before newton on multi-point or rank-deficient contacts, an apgd scout: where such a W is
+// well conditioned on the active set apgd ends in tens of iterations (box pyramids: 30-60)
+// against newton's 8-20 slow steps; where it is not (BoxesStack1, OneObject: thousands) the
+// scout's iterate is dropped and newton starts where it would have. It runs kAutoScoutFirst
+// iterations, then on while its rate reaches the tolerance within kAutoScoutIterations in
+// all. 50 products with W cost less than five dense factorizations (5 n³/3 flops) from 30
+// rows up: below that the scout could cost more than newton's whole solve.
+constexpr int kAutoScoutFirst = 20;
+constexpr int kAutoScoutIterations = 100;
+constexpr int kAutoScoutRows = 30;
 // How many sweeps the probe may go on for, when their rate says they reach the tolerance,
 // before the plan's first member would be cheaper. A Newton step factorizes W (n³/3 flops
 // dense) where a sweep is one pass over it: a frictional Newton solve costs at least about n
@@ -316,7 +327,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
 
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
-std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction) {
+std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction, bool* scout) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
@@ -371,7 +382,11 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction) {
     return gs_suits ? std::vector<K>{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
                     : std::vector<K>{K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
-  if (f.rows <= newton_rows) return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
+  if (f.rows <= newton_rows) {
+    // Multi-point or rank-deficient contacts: apgd scouts first (below).
+    *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
+    return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
+  }
   return gs_suits ? std::vector<K>{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
                   : std::vector<K>{K::kApgd, K::kProx, K::kNewton, K::kNlgs};
 }
@@ -462,16 +477,23 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     bool tried = false;
     int retry_origin = 0;  // 0 not needed, 1 due, 2 done
     bool probe = false;    // one slice only, then out of the rotation
+    bool scout = false;    // apgd before newton: one slice from the start, its iterate dropped unless it ends the solve
   };
   std::vector<Member> members;
   std::vector<SolverKind> plan;  // measured once, when first needed
+  bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton
   auto planned = [&]() -> const std::vector<SolverKind>& {
-    if (plan.empty()) plan = autoPlan(ctx, friction);
+    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout);
     return plan;
   };
   auto startPlan = [&] {
     members.clear();
     for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
+    if (plan_scout && by_residual) {
+      Member apgd{SolverKind::kApgd, kAutoScoutFirst};
+      apgd.scout = true;
+      members.insert(members.begin(), apgd);
+    }
   };
   // The probe runs before the features are even measured: a problem it solves pays for
   // nothing else.
@@ -513,6 +535,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   std::string last_message;
   int used = 0;
   std::size_t m = 0;
+  struct {
+    Eigen::VectorXd x;     // its own last iterate
+    int iterations = 0;
+    Eigen::VectorXd best;  // the best iterate before it, and its measures
+    double residual = 0.0, error = 0.0;
+    FrictionModel model = FrictionModel::kCoulombDisc;
+  } scout;  // the apgd scout's state
   while (!members.empty()) {
     Member& cur = members[m];
     member_params.maxIt = std::min(cur.slice, params.maxIt - used);
@@ -531,11 +560,22 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     // From the best iterate; a member that could not move from it at all runs once more
     // from the portfolio's own start (the warm start), projected onto the feasible sets.
-    const bool from_origin = cur.retry_origin == 1;
-    if (from_origin) cur.retry_origin = 2;
-    x = from_origin ? origin : best;
-    if (from_origin) projectFeasible(ctx, x);
+    const bool from_origin = cur.retry_origin == 1 || (cur.scout && scout.iterations == 0);
+    if (cur.retry_origin == 1) cur.retry_origin = 2;
+    if (cur.scout && scout.iterations > 0) {
+      x = scout.x;  // its own last iterate: apgd resumes (ApgdMemo)
+    } else {
+      x = from_origin ? origin : best;  // the scout from the start: apgd crawls from a Gauss-Seidel iterate
+      if (from_origin) projectFeasible(ctx, x);
+    }
+    if (cur.scout && scout.iterations == 0) {  // what newton starts from if the scout does not end the solve
+      scout.best = best;
+      scout.residual = best_residual;
+      scout.error = best_error;
+      scout.model = best_model;
+    }
     const KernelReport r = runKernel(cur.kind, member, x);
+    if (cur.scout) scout.x = x;
     // A kernel that let a force through on an ignored contact measured the rest against it
     // (fuzzing: a 1e-18 force times a W entry of DBL_MAX made a penetrating contact look
     // separated, "converged"): then its own measure does not count.
@@ -584,6 +624,27 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
       break;
     }
+    if (cur.scout) {
+      // Go on while its rate so far (from the start) reaches the tolerance within its
+      // allowance; otherwise newton starts from what it would have started from.
+      scout.iterations += r.iterations;
+      if (r.iterations > 0 && residual < probe_start && !failedToRun(r.status) &&
+          r.status != SolveStatus::kTimeBudget) {
+        const double per_iteration = std::pow(residual / probe_start, 1.0 / scout.iterations);
+        const double needed = std::log(params.tolerance / residual) / std::log(per_iteration);
+        if (scout.iterations + needed <= kAutoScoutIterations) {
+          cur.slice = static_cast<int>(std::ceil(needed)) + 1;
+          continue;
+        }
+      }
+      best.swap(scout.best);
+      best_residual = scout.residual;
+      best_error = scout.error;
+      best_model = scout.model;
+      members.erase(members.begin() + static_cast<long>(m));
+      m = 0;
+      continue;
+    }
     if (cur.probe) {
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
@@ -608,7 +669,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // and restarted: 3.5×).
       startPlan();
       m = 0;
-      const SolverKind first = members.front().kind;
+      const SolverKind first = planned().front();  // the scout starts from the start anyway
       const bool keep = first == SolverKind::kNlgs || first == SolverKind::kPgs ||
                         (first == SolverKind::kNewton && probe_sweeps <= kAutoProbeSweeps);
       if (!keep) {

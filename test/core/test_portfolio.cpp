@@ -79,6 +79,13 @@ std::string afterProbe(const SolveResult& r) {
   return r.solver;
 }
 
+// The path after the probe and, before newton, the apgd scout that multi-point or
+// rank-deficient contacts get (one apgd stage followed by newton).
+std::string afterScout(const SolveResult& r) {
+  const std::string path = afterProbe(r);
+  return path.rfind("auto:apgd->newton", 0) == 0 ? "auto:" + path.substr(std::string("auto:apgd->").size()) : path;
+}
+
 // The plan started with `first` ("auto:lemke", ...), unless the probe's sweeps alone met the
 // tolerance (path "auto:pgs" or "auto:nlgs", at most its largest allowance: 50 sweeps before
 // apgd, one per row before newton).
@@ -118,7 +125,7 @@ TEST(Portfolio, RankDeficientStackWhereNewtonStallsStillConverges) {
   EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
   EXPECT_LE(r.iterations, 20000);
   expectPath(r);
-  EXPECT_EQ(afterProbe(r).rfind("auto:newton->", 0), 0u) << r.solver;  // predicted first, then handed over
+  EXPECT_EQ(afterScout(r).rfind("auto:newton->", 0), 0u) << r.solver;  // predicted first, then handed over
   // The proximal kernel on its own reaches the tolerance too.
   const SolveResult prox = solveProblem(p, params(SolverKind::kProx, tol, 20000));
   EXPECT_EQ(prox.status, SolveStatus::kConverged) << prox.message;
@@ -233,7 +240,7 @@ TEST(Portfolio, WarmStartFeedsTheFirstMember) {
 // What each feature predicts (docs/ARCHITECTURE.md): the first member of the path.
 TEST(Portfolio, FirstMemberFollowsTheFeatures) {
   const Problem stack = boxStack(3, 4, 1.0, 0.5, 0.8);  // coupled normals (4 points per face)
-  EXPECT_EQ(afterProbe(solveProblem(stack, params(SolverKind::kAuto, 1e-8, 5000))).rfind("auto:newton", 0), 0u);
+  EXPECT_EQ(afterScout(solveProblem(stack, params(SolverKind::kAuto, 1e-8, 5000))).rfind("auto:newton", 0), 0u);
   expectPlanStartsWith(solveProblem(stack, params(SolverKind::kAuto, 1e-2, 5000)), "auto:apgd");
   // Separate contacts (W block diagonal): Gauss-Seidel is exact in one sweep.
   World w;
@@ -317,6 +324,45 @@ TEST(Portfolio, GaussSeidelFirstAtModerateToleranceUnlessContactsAreMultiPoint) 
                                     s.residual_history.begin() + static_cast<long>(k));
     EXPECT_TRUE(apgd_after_probe) << s.solver << " at " << tol;
   }
+}
+
+// Two boxes on the ground and a third across them, four points under each box: the small
+// brick pyramid of the scenes (16 contacts, 48 rows against 18 DoF), pushed sideways.
+Problem brickPyramid(double push, double mu) {
+  World w;
+  const Eigen::Vector3d size(1.0, 1.0, 0.5);
+  for (int i = 0; i < 2; ++i) w.add(hard::box(1.0, size, Eigen::Vector3d(1.1 * i, 0.0, 0.25)));
+  Body top = hard::box(1.0, size, Eigen::Vector3d(0.55, 0.0, 0.75));
+  top.v = Eigen::Vector3d(push, 0.0, 0.0);
+  const int t = w.add(top);
+  for (int i = 0; i < 2; ++i)
+    for (const Eigen::Vector3d& p : hard::bottomPoints(w.bodies[i].com, size, 4))
+      w.contact(i, -1, p, Eigen::Vector3d::UnitZ(), mu);
+  for (const Eigen::Vector3d& p : hard::bottomPoints(w.bodies[t].com, size, 4)) {  // two over each
+    w.contact(t, p.x() < 0.55 ? 0 : 1, p, Eigen::Vector3d::UnitZ(), mu);
+  }
+  return w.problem();
+}
+
+// Before newton, multi-point contacts get an apgd scout from the start: on the brick pyramid
+// apgd ends in tens of iterations where newton needs its warm-up and several steps, so the
+// scout ends the solve; on the heavy box stack it does not (apgd needs thousands), and newton
+// then runs as it would have. Answers checked against Coulomb's law from the forces.
+TEST(Portfolio, AnApgdScoutGoesBeforeNewtonOnMultiPointContacts) {
+  const Problem pyramid = brickPyramid(0.0, 0.8);
+  const double tol = 1e-6;
+  const SolveResult apgd = solveProblem(pyramid, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_TRUE(apgd.converged) << apgd.message;
+  ASSERT_LE(apgd.iterations, 100);  // within the scout's allowance
+  const SolveResult r = solveProblem(pyramid, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs->apgd");
+  EXPECT_LE(recomputedResidual(pyramid, r), tol);
+  const Problem stack = boxStack(4, 4, 100.0, 0.5, 0.8);
+  const SolveResult s = solveProblem(stack, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
+  EXPECT_EQ(afterProbe(s).rfind("auto:apgd->newton", 0), 0u) << s.solver;
+  EXPECT_LE(recomputedResidual(stack, s), tol);
 }
 
 // Four frictional contacts whose normal rows couple their neighbours (κ = 0.3: above the
