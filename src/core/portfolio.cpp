@@ -81,8 +81,8 @@ constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
 // against newton's 8-20 slow steps; where it is not (BoxesStack1, OneObject: thousands) the
 // scout's iterate is dropped and newton starts where it would have. It runs kAutoScoutFirst
 // iterations, then on while its rate reaches the tolerance within kAutoScoutIterations in
-// all. 50 products with W cost less than five dense factorizations (5 n³/3 flops) from 30
-// rows up: below that the scout could cost more than newton's whole solve.
+// all. Its first 20 products with W cost less than two dense factorizations (2 n³/3 flops)
+// from 30 rows up: below that the scout could cost more than newton's whole solve.
 constexpr int kAutoScoutFirst = 20;
 constexpr int kAutoScoutIterations = 100;
 constexpr int kAutoScoutRows = 30;
@@ -100,6 +100,14 @@ int probeAllowance(const std::vector<SolverKind>& plan, const SolveContext& ctx,
     case SolverKind::kApgd: return kAutoProbeApgdSweeps;
     default: return kAutoProbeSweeps;
   }
+}
+
+// The further iterations a run that went from residual `from` to `to` (< from) in
+// `iterations` needs to reach `tolerance` at the same geometric rate (the probe's stages, the
+// scout).
+double iterationsToReach(double tolerance, double from, double to, int iterations) {
+  const double per_iteration = std::pow(to / from, 1.0 / iterations);
+  return std::log(tolerance / to) / std::log(per_iteration);
 }
 
 struct AutoFeatures {
@@ -477,7 +485,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     bool tried = false;
     int retry_origin = 0;  // 0 not needed, 1 due, 2 done
     bool probe = false;    // one slice only, then out of the rotation
-    bool scout = false;    // apgd before newton: one slice from the start, its iterate dropped unless it ends the solve
+    bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
   };
   std::vector<Member> members;
   std::vector<SolverKind> plan;  // measured once, when first needed
@@ -630,8 +638,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       scout.iterations += r.iterations;
       if (r.iterations > 0 && residual < probe_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
-        const double per_iteration = std::pow(residual / probe_start, 1.0 / scout.iterations);
-        const double needed = std::log(params.tolerance / residual) / std::log(per_iteration);
+        const double needed = iterationsToReach(params.tolerance, probe_start, residual, scout.iterations);
         if (scout.iterations + needed <= kAutoScoutIterations) {
           cur.slice = static_cast<int>(std::ceil(needed)) + 1;
           continue;
@@ -651,8 +658,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       probe_sweeps += r.iterations;
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
-        const double per_sweep = std::pow(best_residual / stage_start, 1.0 / r.iterations);
-        const double needed = std::log(params.tolerance / best_residual) / std::log(per_sweep);
+        const double needed = iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations);
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
         int allowance = kAutoProbeSweeps;
         if (probe_sweeps + 2.0 * needed > allowance) allowance = probeAllowance(planned(), ctx, friction);
