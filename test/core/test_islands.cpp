@@ -403,7 +403,8 @@ TEST(SymmetricNewton, OtherProblemsTakeTheGeneralNewton) {
 }
 
 // Singular W (more rows than degrees of freedom, no diagonal shift): the forces are not
-// unique; newton still reaches the tolerance (the general Newton takes over if needed).
+// unique; the active-set path solves the semidefinite W_AA by a pivoted LDLᵀ without its
+// zero pivots, and the residual of the forces is the tolerance.
 TEST(SymmetricNewton, RankDeficientWStillSolved) {
   Generated g = generate(2, 10, Kinds::kFrictionless, 51, 0.0, 4);
   // A solvable one: d_free = -W λ* + s with λ* >= 0, s >= 0, λ*ᵀ s = 0.
@@ -413,7 +414,26 @@ TEST(SymmetricNewton, RankDeficientWStillSolved) {
   g.problem.d_free = -W * star + slack;
   const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kNewton, 1e-8, 5000, false));
   EXPECT_TRUE(r.converged) << r.message;
+  EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
   EXPECT_LE(recomputedResidual(g.problem, r.forces), 1e-8);
+  // W = [1 1; 1 1] (rank one), q = -1: every λ >= 0 on λ1 + λ2 = 1 solves it, in one step.
+  Problem line;
+  line.W = Eigen::MatrixXd::Ones(2, 2);
+  line.d_free = -Eigen::VectorXd::Ones(2);
+  for (int i = 0; i < 2; ++i) {
+    Contact c;
+    c.id = i;
+    c.type = ContactType::kFrictionless;
+    c.rows = 1;
+    line.contacts.push_back(c);
+  }
+  const SolveResult one = solveProblem(line, paramsFor(SolverKind::kNewton, 1e-10, 100, false));
+  ASSERT_TRUE(one.converged) << one.message;
+  EXPECT_NE(one.message.find("active-set"), std::string::npos) << one.message;
+  EXPECT_EQ(one.iterations, 1);
+  EXPECT_LE(recomputedResidual(line, one.forces), 1e-10);
+  EXPECT_NEAR(one.forces.sum(), 1.0, 1e-12);
+  EXPECT_GE(one.forces.minCoeff(), 0.0);
 }
 
 }  // namespace

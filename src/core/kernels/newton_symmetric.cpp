@@ -19,7 +19,10 @@
 // iterate.
 //
 // Factorisation: small or dense W: W_AA gathered into a dense matrix (Eigen's blocked LLᵀ,
-// several times faster than its unblocked LDLᵀ at a few hundred rows). Larger sparse
+// several times faster than its unblocked LDLᵀ at a few hundred rows). A W_AA that is only
+// semidefinite (redundant rows, no diagonal shift) gets a pivoted LDLᵀ whose zero pivots
+// are dropped: one of the many solutions when W_AA λ_A = -q_A is consistent, which the
+// residual then confirms. Larger sparse
 // W: Eigen's SimplicialLDLT on a matrix with W's full pattern in which the
 // rows and columns of I are replaced by the identity, so the pattern (and the AMD ordering
 // and elimination tree, analysed once per solve) is the same at every iteration.
@@ -116,8 +119,10 @@ class DenseReduced : public ReducedSystem {
     for (int c = 0; c < m_; ++c)
       for (int r = c; r < m_; ++r) M(r, c) = W(s_.index[r], s_.index[c]);  // LLT reads the lower half
     // In place (Eigen's blocked LLᵀ; fails unless W_AA > 0): L overwrites M's lower half.
+    semidefinite_ = false;
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(M);
-    return llt.info() == Eigen::Success;
+    if (llt.info() == Eigen::Success) return true;
+    return factorizeSemidefinite();
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
     x.setZero(rhs.size());
@@ -125,9 +130,13 @@ class DenseReduced : public ReducedSystem {
     s_.b.resize(m_);
     Eigen::Map<Eigen::VectorXd> b(s_.b.data(), m_);
     for (int k = 0; k < m_; ++k) b[k] = rhs[s_.index[k]];
-    const Eigen::Map<const Eigen::MatrixXd> L(s_.M.data(), m_, m_);
-    L.triangularView<Eigen::Lower>().solveInPlace(b);
-    L.triangularView<Eigen::Lower>().adjoint().solveInPlace(b);
+    if (semidefinite_) {
+      solveSemidefinite(b);
+    } else {
+      const Eigen::Map<const Eigen::MatrixXd> L(s_.M.data(), m_, m_);
+      L.triangularView<Eigen::Lower>().solveInPlace(b);
+      L.triangularView<Eigen::Lower>().adjoint().solveInPlace(b);
+    }
     for (int k = 0; k < m_; ++k) x[s_.index[k]] = b[k];
   }
   void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
@@ -138,8 +147,41 @@ class DenseReduced : public ReducedSystem {
   }
 
  private:
+  // W_AA only semidefinite: redundant rows (more contacts than the bodies' degrees of freedom,
+  // a box's four corners on a plane) with no diagonal shift. W_AA λ_A = -q_A then has many
+  // solutions when it is consistent; a pivoted LDLᵀ whose zero pivots are dropped gives one,
+  // and the caller's residual check accepts it or not. Before, the active-set path gave up
+  // here for the general Newton (2x the time on a 2-row rank-1 LCP). Indefinite: false.
+  bool factorizeSemidefinite() {
+    const Eigen::Map<const Eigen::MatrixXd> W(s_.W.data(), n_, n_);
+    Eigen::MatrixXd A(m_, m_);
+    for (int c = 0; c < m_; ++c)
+      for (int r = c; r < m_; ++r) A(r, c) = W(s_.index[r], s_.index[c]);
+    ldlt_.compute(A);
+    const Eigen::VectorXd& D = ldlt_.vectorD();
+    const double largest = D.cwiseAbs().maxCoeff();
+    if (!(largest > 0.0) || !D.allFinite()) return false;
+    zero_pivot_ = kZeroPivot * largest;
+    if (D.minCoeff() < -zero_pivot_) return false;
+    semidefinite_ = true;
+    return true;
+  }
+  // x = Pᵀ L⁻ᵀ D⁺ L⁻¹ P b, D⁺ dropping the zero pivots.
+  void solveSemidefinite(Eigen::Map<Eigen::VectorXd>& b) const {
+    Eigen::VectorXd y = ldlt_.transpositionsP() * b;
+    ldlt_.matrixL().solveInPlace(y);
+    const Eigen::VectorXd& D = ldlt_.vectorD();
+    for (int k = 0; k < m_; ++k) y[k] = D[k] > zero_pivot_ ? y[k] / D[k] : 0.0;
+    ldlt_.matrixU().solveInPlace(y);
+    b = ldlt_.transpositionsP().transpose() * y;
+  }
+  static constexpr double kZeroPivot = 1e-12;  // relative to the largest pivot
+
   DenseScratch& s_;
   int n_ = 0, m_ = 0;
+  bool semidefinite_ = false;
+  double zero_pivot_ = 0.0;
+  Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 
 class SparseReduced : public ReducedSystem {
