@@ -7,9 +7,11 @@
 #include "lcp_contact_solver/core/residual.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 
 namespace lcp_contact_solver::core {
@@ -36,7 +38,8 @@ using Clock = std::chrono::steady_clock;
 // decide between Gauss-Seidel and apgd down to 1e-4 and put an apgd scout before a planned
 // newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
-// measured and wherever Gauss-Seidel can start, a probe of its sweeps: three, then stage by
+// measured and wherever Gauss-Seidel can start (but not on a dense symmetric LCP whose plan
+// is newton's few Cholesky steps), a probe of its sweeps: three, then stage by
 // stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
 // (probeAllowance). A few weakly coupled contacts with exact local solves end there, at a
@@ -86,6 +89,23 @@ constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
 constexpr int kAutoScoutFirst = 20;
 constexpr int kAutoScoutIterations = 100;
 constexpr int kAutoScoutRows = 30;
+// auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
+class Plan {
+ public:
+  Plan() = default;
+  Plan(std::initializer_list<SolverKind> kinds) {
+    for (SolverKind k : kinds) kinds_[size_++] = k;
+  }
+  bool empty() const { return size_ == 0; }
+  SolverKind front() const { return kinds_[0]; }
+  const SolverKind* begin() const { return kinds_.data(); }
+  const SolverKind* end() const { return kinds_.data() + size_; }
+
+ private:
+  std::array<SolverKind, 4> kinds_{};
+  int size_ = 0;
+};
+
 // How many sweeps the probe may go on for, when their rate says they reach the tolerance,
 // before the plan's first member would be cheaper. A Newton step factorizes W (n³/3 flops
 // dense) where a sweep is one pass over it: a frictional Newton solve costs at least about n
@@ -93,7 +113,7 @@ constexpr int kAutoScoutRows = 30;
 // active-set path is a few Cholesky steps: the probe's ten. apgd's iteration is one product
 // with W, about a sweep, and where Gauss-Seidel's rate is good apgd needs 2..6x its
 // iterations: fifty. Others (Lemke, prox, a fixed plan): ten.
-int probeAllowance(const std::vector<SolverKind>& plan, const SolveContext& ctx, bool friction) {
+int probeAllowance(const Plan& plan, const SolveContext& ctx, bool friction) {
   switch (plan.front()) {
     case SolverKind::kNewton:
       return friction ? std::max(kAutoProbeSweeps, ctx.problem->rowCount()) : kAutoProbeSweeps;
@@ -192,8 +212,8 @@ struct CouplingSet {
 // ground), more rows than those bodies' degrees of freedom. A set holding every active contact
 // says nothing (one body, or a deformable one whose compliance couples everything).
 double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& coupled, int active) {
-  std::vector<CouplingSet> sets;
-  sets.reserve(coupled.size());
+  thread_local std::vector<CouplingSet> sets;  // per thread: no allocation after the first solve
+  sets.clear();
   for (std::size_t i = 0; i < coupled.size(); ++i) {
     if (ctx.ignored[i]) continue;
     coupled[i].add(static_cast<int>(i));
@@ -213,13 +233,24 @@ double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& couple
 Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
-  std::vector<double> scratch(3 * static_cast<std::size_t>(nc), 0.0);  // one allocation
+  // Scratch kept per thread: no allocation on a microsecond solve after the first.
+  thread_local std::vector<double> scratch;
+  thread_local std::vector<char> redundant, active_contact;
+  thread_local std::vector<double> active_weight;  // 1 or 0: the LCP loop below without branches
+  // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
+  thread_local std::vector<CouplingSet> coupled;
+  scratch.assign(3 * static_cast<std::size_t>(nc), 0.0);
+  redundant.assign(redundancy ? nc : 0, 0);
+  coupled.assign(redundancy ? nc : 0, CouplingSet{});
+  active_contact.resize(nc);
+  active_weight.resize(nc);
+  for (int i = 0; i < nc; ++i) {
+    active_contact[i] = ctx.ignored[i] ? 0 : 1;
+    active_weight[i] = active_contact[i];
+  }
   double* diag = scratch.data();
   double* off_sum = diag + nc;
   double* lower_sum = off_sum + nc;
-  std::vector<char> redundant(redundancy ? nc : 0, 0);
-  // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
-  std::vector<CouplingSet> coupled(redundancy ? nc : 0);
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
   for (int i = 0; i < nc; ++i) diag[i] = normalDiagonal(ctx, i);
   auto visit = [&](int i, int j, double w) {
@@ -232,10 +263,21 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
       redundant[i] = 1;
   };
   if (dense) {
+    const int* offsets = ctx.offsets.data();
     for (int j = 0; j < nc; ++j) {
-      if (ctx.ignored[j]) continue;
+      if (!active_contact[j]) continue;
+      const double* column = dense->data() + static_cast<std::ptrdiff_t>(offsets[j]) * dense->rows();
+      if (!redundancy) {  // an LCP: only κ and the Gauss-Seidel bound, branch-free loops
+        for (int i = 0; i < j; ++i) off_sum[i] += active_weight[i] * std::abs(column[offsets[i]]);
+        for (int i = j + 1; i < nc; ++i) {
+          const double w = active_weight[i] * std::abs(column[offsets[i]]);
+          off_sum[i] += w;
+          lower_sum[i] += w;
+        }
+        continue;
+      }
       for (int i = 0; i < nc; ++i)
-        if (i != j && !ctx.ignored[i]) visit(i, j, (*dense)(ctx.offsets[i], ctx.offsets[j]));
+        if (i != j && active_contact[i]) visit(i, j, column[offsets[i]]);
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
     for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
@@ -297,7 +339,8 @@ double sparseCoupling(const SolveContext& ctx, const BlockSparseMatrix& W, doubl
   return active > 0 ? sum / active : 0.0;
 }
 
-AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) {
+// `known_symmetric`: W's symmetry when the caller measured it already (-1: not measured).
+AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, int known_symmetric) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
@@ -322,7 +365,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
     // symmetric: comparing every island's blocks cost as much as newton's whole solve on
     // MuJoCo's steps, and newton tests the symmetry itself before its active-set path (a
     // non-symmetric W gets its general semismooth path, then Lemke on a stall).
-    f.symmetric = f.sparse || isSymmetric(ctx.problem->W, 1e-12);
+    f.symmetric = f.sparse || (known_symmetric >= 0 ? known_symmetric == 1 : isSymmetric(ctx.problem->W, 1e-12));
   }
   if (body_dof > 0) {
     int active_rows = 0;
@@ -335,7 +378,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction) 
 
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
-std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction, bool* scout) {
+Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_symmetric) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
@@ -343,12 +386,12 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction, bool* s
   // One contact (most islands of a scene at rest): Gauss-Seidel's local step is that
   // contact's own exact solve, so no feature is worth measuring.
   if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && positiveDiagonal(ctx))
-    return friction ? std::vector<K>{K::kNlgs, K::kNewton, K::kApgd, K::kProx}
-                    : std::vector<K>{K::kPgs, K::kLemke, K::kNewton, K::kApgd};
+    return friction ? Plan{K::kNlgs, K::kNewton, K::kApgd, K::kProx}
+                    : Plan{K::kPgs, K::kLemke, K::kNewton, K::kApgd};
   if (ctx.problem->bodies)  // unbuilt first: no W
-    return friction ? std::vector<K>{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
-                    : std::vector<K>{K::kPgs, K::kNewton, K::kApgd};
-  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof, friction);
+    return friction ? Plan{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
+                    : Plan{K::kPgs, K::kNewton, K::kApgd};
+  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof, friction, known_symmetric);
   if (!friction) {
     // An LCP. Symmetric W (a convex QP): newton's active-set path ends in a few Cholesky
     // steps whatever the coupling; projected Gauss-Seidel only where W is so diagonally
@@ -357,12 +400,13 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction, bool* s
     // strictly dominant or a triangular W); otherwise Lemke's pivoting is exact and, up to a dense
     // tableau of kAutoLemkeRows, cheap.
     if (f.rows > kAutoLemkeRows) return {K::kPgs, K::kNewton, K::kApgd};
+    // Without a positive diagonal pgs cannot start (zero_diagonal): it is left out.
     const bool positive = f.positive_diagonal;
     if (f.symmetric && f.coupling < kAutoStrongDominant && positive)
       return {K::kPgs, K::kNewton, K::kLemke, K::kApgd};
-    if (f.symmetric) return {K::kNewton, K::kPgs, K::kLemke, K::kApgd};
+    if (f.symmetric) return positive ? Plan{K::kNewton, K::kPgs, K::kLemke, K::kApgd} : Plan{K::kNewton, K::kLemke, K::kApgd};
     if (positive && f.gs_bound < 1.0) return {K::kPgs, K::kLemke, K::kNewton, K::kApgd};
-    return {K::kLemke, K::kPgs, K::kNewton, K::kApgd};
+    return positive ? Plan{K::kLemke, K::kPgs, K::kNewton, K::kApgd} : Plan{K::kLemke, K::kNewton, K::kApgd};
   }
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
   // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
@@ -387,16 +431,16 @@ std::vector<SolverKind> autoPlan(const SolveContext& ctx, bool friction, bool* s
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
   if (f.sparse && f.rows > kAutoNewtonRows)
-    return gs_suits ? std::vector<K>{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
-                    : std::vector<K>{K::kApgd, K::kNlgs, K::kNewton, K::kProx};
+    return gs_suits ? Plan{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
+                    : Plan{K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
   if (f.rows <= newton_rows) {
     // Multi-point or rank-deficient contacts: apgd scouts first (below).
     *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
     return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   }
-  return gs_suits ? std::vector<K>{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
-                  : std::vector<K>{K::kApgd, K::kProx, K::kNewton, K::kNlgs};
+  return gs_suits ? Plan{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
+                  : Plan{K::kApgd, K::kProx, K::kNewton, K::kNlgs};
 }
 
 // Iterations of a member's first slice, and the residual factor a slice must reach to keep
@@ -455,7 +499,18 @@ double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda)
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
 // pool) so that a microsecond island pays no allocation for it after the first solve: the
 // member context (its vectors assigned in place) and the iterates.
+struct PortfolioMember {
+  SolverKind kind;
+  int slice;
+  double rate = 0.0;  // log residual decrease per second, last slice
+  bool tried = false;
+  int retry_origin = 0;  // 0 not needed, 1 due, 2 done
+  bool probe = false;    // one slice only, then out of the rotation
+  bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
+};
+
 struct Workspace {
+  std::vector<PortfolioMember> members;
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
   GaussSeidelMemo gs_memo;  // the probe's blocks serve every later Gauss-Seidel slice
@@ -478,36 +533,39 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  struct Member {
-    SolverKind kind;
-    int slice;
-    double rate = 0.0;  // log residual decrease per second, last slice
-    bool tried = false;
-    int retry_origin = 0;  // 0 not needed, 1 due, 2 done
-    bool probe = false;    // one slice only, then out of the rotation
-    bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
-  };
-  std::vector<Member> members;
-  std::vector<SolverKind> plan;  // measured once, when first needed
+  thread_local Workspace work;
+  std::vector<PortfolioMember>& members = work.members;
+  members.clear();
+  Plan plan;                     // measured once, when first needed
   bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton
-  auto planned = [&]() -> const std::vector<SolverKind>& {
-    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout);
+  int known_symmetric = -1;      // W's symmetry once measured (LCPs)
+  auto planned = [&]() -> const Plan& {
+    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout, known_symmetric);
     return plan;
   };
   auto startPlan = [&] {
     members.clear();
     for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
     if (plan_scout && by_residual) {
-      Member apgd{SolverKind::kApgd, kAutoScoutFirst};
+      PortfolioMember apgd{SolverKind::kApgd, kAutoScoutFirst};
       apgd.scout = true;
       members.insert(members.begin(), apgd);
     }
   };
   // The probe runs before the features are even measured: a problem it solves pays for
   // nothing else.
-  const SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
+  SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
+  // Except on a dense symmetric LCP (a convex QP) whose plan is newton's active-set path: a
+  // few Cholesky steps whatever the coupling, which the probe's sweeps would only delay
+  // (MuJoCo's dense pyramidal steps: +45 %). The symmetry test stops at the first unequal
+  // pair, so a non-symmetric W pays almost nothing for it.
+  if (probe_kind == SolverKind::kPgs && std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) &&
+      ctx.problem->rowCount() <= kAutoLemkeRows) {
+    known_symmetric = isSymmetric(ctx.problem->W, 1e-12) ? 1 : 0;
+    if (known_symmetric == 1 && planned().front() == SolverKind::kNewton) probe_kind = SolverKind::kAuto;
+  }
   if (probe_kind != SolverKind::kAuto) {
-    Member probe{probe_kind, kAutoProbeFirst};
+    PortfolioMember probe{probe_kind, kAutoProbeFirst};
     probe.probe = true;
     members.push_back(probe);
   } else {
@@ -524,7 +582,6 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   for (std::size_t i = 0; i < ctx.problem->contacts.size() && !needs_zeroing; ++i)
     needs_zeroing = hasSlidingFriction(ctx.problem->contacts[i].type) && ctx.mu[i] == 0.0;
   SolverParams member_params = params;
-  thread_local Workspace work;
   SolveContext& member = work.member;
   member = ctx;  // each slice changes its limits only
   work.gs_memo.clear();
@@ -551,7 +608,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     FrictionModel model = FrictionModel::kCoulombDisc;
   } scout;  // the apgd scout's state
   while (!members.empty()) {
-    Member& cur = members[m];
+    PortfolioMember& cur = members[m];
     member_params.maxIt = std::min(cur.slice, params.maxIt - used);
     member.params = &member_params;
     const Clock::time_point t0 = Clock::now();

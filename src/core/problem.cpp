@@ -145,10 +145,16 @@ int complianceCols(const ComplianceMatrix& W) {
 namespace {
 
 bool denseIsSymmetric(const Eigen::MatrixXd& M, double relative_tolerance) {
-  const double tol = relative_tolerance * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
+  // The tolerance (a pass over M) only once a pair differs at all: an assembled W is often
+  // exactly symmetric, and auto asks this of microsecond LCPs.
+  double tol = -1.0;
   for (Eigen::Index j = 0; j < M.cols(); ++j)
-    for (Eigen::Index i = j + 1; i < M.rows(); ++i)
-      if (std::abs(M(i, j) - M(j, i)) > tol) return false;
+    for (Eigen::Index i = j + 1; i < M.rows(); ++i) {
+      const double gap = std::abs(M(i, j) - M(j, i));
+      if (!(gap > 0.0)) continue;
+      if (tol < 0.0) tol = relative_tolerance * std::max(M.cwiseAbs().maxCoeff(), 1e-300);
+      if (!(gap <= tol)) return false;
+    }
   return true;
 }
 

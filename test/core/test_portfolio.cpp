@@ -412,12 +412,14 @@ TEST(Portfolio, TheProbeGoesOnWhileItsRateReachesTheTolerance) {
 
 // A frictionless stack (μ = 0: one normal row per contact) has a symmetric, coupled W: a
 // convex QP, which newton's active-set path ends in a few Cholesky steps, so auto starts
-// there. The same W made non-symmetric is no QP: Lemke's pivoting goes first.
+// there, without the Gauss-Seidel probe (it would only delay them). The same W made
+// non-symmetric is no QP: the probe, then Lemke's pivoting.
 TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   const Problem stack = boxStack(3, 4, 1.0, 0.5, 0.0);
+  ASSERT_TRUE(std::holds_alternative<Eigen::MatrixXd>(stack.W));
   const SolveResult r = solveProblem(stack, params(SolverKind::kAuto, 1e-8, 5000));
   ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
-  EXPECT_EQ(afterProbe(r).rfind("auto:newton", 0), 0u) << r.solver;
+  EXPECT_EQ(r.solver.rfind("auto:newton", 0), 0u) << r.solver;
   EXPECT_LE(recomputedResidual(stack, r), 1e-8);
   Problem skewed = stack;
   Eigen::MatrixXd W = toDense(skewed.W);
@@ -425,6 +427,20 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   skewed.W = W;
   const SolveResult s = solveProblem(skewed, params(SolverKind::kAuto, 1e-8, 5000));
   EXPECT_EQ(afterProbe(s).rfind("auto:lemke", 0), 0u) << s.solver;
+}
+
+// A bimatrix game's LCP (W = [0 A; Bᵀ 0]) has no diagonal: pgs cannot start (zero_diagonal),
+// so auto leaves it out of the plan; Lemke, whose covering ray ends here, hands over to newton.
+TEST(Portfolio, LcpWithoutDiagonalLeavesPgsOut) {
+  Eigen::Matrix4d W;
+  W << 0, 0, 1, 3, 0, 0, 2, 1, 1, 3, 0, 0, 2, 1, 0, 0;
+  const Problem game = frictionlessLcp(W, -Eigen::Vector4d::Ones());
+  ASSERT_EQ(solveProblem(game, params(SolverKind::kPgs, 1e-8, 100)).status, SolveStatus::kZeroDiagonal);
+  const SolveResult r = solveProblem(game, params(SolverKind::kAuto, 1e-8, 1000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver.find("pgs"), std::string::npos) << r.solver;
+  expectPath(r);
+  EXPECT_LE(recomputedResidual(game, r), 1e-8);
 }
 
 // A non-symmetric W with a positive, dominant diagonal (an H-matrix): projected Gauss-Seidel
