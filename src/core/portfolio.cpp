@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 
 namespace lcp_contact_solver::core {
 
@@ -517,6 +518,11 @@ struct Workspace {
   ApgdMemo apgd_memo;       // an apgd slice resumes the last one when handed its answer back
 };
 
+Workspace& portfolioWorkspace() {
+  thread_local Workspace work;
+  return work;
+}
+
 KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const SolverParams& params = *ctx.params;
   KernelReport report;
@@ -533,7 +539,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  thread_local Workspace work;
+  Workspace& work = portfolioWorkspace();  // one thread-local lookup per solve
   std::vector<PortfolioMember>& members = work.members;
   members.clear();
   Plan plan;                     // measured once, when first needed
@@ -574,7 +580,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const double probe_start = best_residual;
   double stage_start = best_residual;
   int probe_sweeps = 0;
-  Problem assembled;                       // the body form's W, assembled only if a member needs it
+  std::unique_ptr<Problem> assembled;      // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
   // μ = 0 contact; what the solve returns has none, so that is what is measured.
@@ -619,9 +625,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     member.problem = ctx.problem;
     if (ctx.problem->bodies && cur.kind != SolverKind::kNlgs && cur.kind != SolverKind::kPgs) {
-      if (assembled.contacts.empty() && !ctx.problem->contacts.empty())
-        assembled = assembledProblem(*ctx.problem);
-      member.problem = &assembled;
+      if (!assembled) assembled = std::make_unique<Problem>(assembledProblem(*ctx.problem));
+      member.problem = assembled.get();
     }
     // From the best iterate; a member that could not move from it at all runs once more
     // from the portfolio's own start (the warm start), projected onto the feasible sets.
@@ -790,6 +795,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
 
 std::string autoPath(const std::vector<std::pair<std::string, double>>& stages) {
   if (stages.empty()) return "auto";
+  if (stages.size() == 1) return "auto:" + stages.front().first;  // the common case, no loop
   std::size_t length = 5;
   for (const auto& stage : stages) length += stage.first.size() + 2;
   std::string path;  // one allocation: this runs on every auto solve, microsecond ones too
