@@ -158,6 +158,10 @@ struct Coupling {
   double multi_point = 0.0;  // multiPointShare
 };
 
+bool anyIgnored(const SolveContext& ctx) {
+  return std::find(ctx.ignored.begin(), ctx.ignored.end(), true) != ctx.ignored.end();
+}
+
 int activeContacts(const SolveContext& ctx) {
   int n = 0;
   for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) n += ctx.ignored[i] ? 0 : 1;
@@ -341,6 +345,36 @@ double sparseCoupling(const SolveContext& ctx, const BlockSparseMatrix& W, doubl
 }
 
 // `known_symmetric`: W's symmetry when the caller measured it already (-1: not measured).
+// normalCoupling's κ on a dense symmetric W, column by column (contiguous; a column's sum is
+// its row's), read only until it is known to reach `enough`, as sparseCoupling: on MuJoCo's
+// dense pyramidal islands the full pass cost a fifth of newton's solve.
+double denseSymmetricCoupling(const SolveContext& ctx, const Eigen::MatrixXd& W, double enough) {
+  const int nc = static_cast<int>(ctx.problem->contacts.size());
+  const int* offsets = ctx.offsets.data();
+  const double stop = enough * activeContacts(ctx);
+  const bool any_ignored = anyIgnored(ctx);
+  double sum = 0.0;
+  int active = 0;
+  for (int j = 0; j < nc; ++j) {
+    if (ctx.ignored[j]) continue;
+    const double* column = W.data() + static_cast<std::ptrdiff_t>(offsets[j]) * W.rows();
+    const double diag = column[offsets[j]];
+    if (diag <= 0.0) continue;  // as normalCoupling: a row without diagonal adds nothing
+    double off = 0.0;
+    for (int i = 0; i < nc; ++i)
+      if (i != j && (!any_ignored || !ctx.ignored[i])) off += std::abs(column[offsets[i]]);
+    sum += off / diag;
+    ++active;
+    if (sum >= stop) return sum / active;
+  }
+  return active > 0 ? sum / active : 0.0;
+}
+
+// A dense LCP's W is compared for symmetry (a non-symmetric one usually at its first pair); a
+// block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed symmetric:
+// comparing every island's blocks cost as much as newton's whole solve on MuJoCo's steps, and
+// newton tests the symmetry itself before its active-set path (a non-symmetric W gets its
+// general semismooth path, then Lemke on a stall).
 AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, int known_symmetric) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
@@ -353,6 +387,14 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.symmetric = true;  // presumed (below)
     return f;
   }
+  if (!friction && !f.body_form) {  // a dense LCP: its symmetry first (below)
+    f.symmetric = known_symmetric >= 0 ? known_symmetric == 1 : isSymmetric(ctx.problem->W, 1e-12);
+    if (f.symmetric) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
+      f.coupling = denseSymmetricCoupling(ctx, std::get<Eigen::MatrixXd>(ctx.problem->W), kAutoStrongDominant);
+      f.positive_diagonal = positiveDiagonal(ctx);
+      return f;
+    }
+  }
   if (!f.body_form) {
     const Coupling c = normalCoupling(ctx, friction);
     f.coupling = c.kappa;
@@ -360,13 +402,6 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.positive_diagonal = c.positive_diagonal;
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
     f.multi_point = c.multi_point >= kAutoRedundantShare;
-  }
-  if (!friction && !f.body_form && f.rows <= kAutoLemkeRows) {
-    // A block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed
-    // symmetric: comparing every island's blocks cost as much as newton's whole solve on
-    // MuJoCo's steps, and newton tests the symmetry itself before its active-set path (a
-    // non-symmetric W gets its general semismooth path, then Lemke on a stall).
-    f.symmetric = f.sparse || (known_symmetric >= 0 ? known_symmetric == 1 : isSymmetric(ctx.problem->W, 1e-12));
   }
   if (body_dof > 0) {
     int active_rows = 0;
@@ -470,10 +505,6 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
       projectOntoCone(ctx.mu[i], l);
     }
   }
-}
-
-bool anyIgnored(const SolveContext& ctx) {
-  return std::find(ctx.ignored.begin(), ctx.ignored.end(), true) != ctx.ignored.end();
 }
 
 // The Gauss-Seidel kernel that can probe this problem (kAuto: none): not where the plan is

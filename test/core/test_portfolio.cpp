@@ -421,6 +421,14 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
   EXPECT_EQ(r.solver.rfind("auto:newton", 0), 0u) << r.solver;
   EXPECT_LE(recomputedResidual(stack, r), 1e-8);
+  // Symmetric but strongly dominant (κ = 0.05 < 0.25): a few pgs sweeps contract it, first.
+  Eigen::Matrix3d D;
+  D << 4.0, 0.1, -0.1, 0.1, 4.0, 0.1, -0.1, 0.1, 4.0;
+  const Problem dominant = frictionlessLcp(D, Eigen::Vector3d(-1.0, 0.5, -2.0));
+  const SolveResult d = solveProblem(dominant, params(SolverKind::kAuto, 1e-10, 1000));
+  ASSERT_TRUE(d.converged) << d.message;
+  EXPECT_EQ(d.solver, "auto:pgs");
+  EXPECT_LE(recomputedResidual(dominant, d), 1e-10);
   Problem skewed = stack;
   Eigen::MatrixXd W = toDense(skewed.W);
   W(0, 3) += 0.1 * W(0, 0);  // normal rows 0 and 1 (rows 0 and 3), one side only
