@@ -113,11 +113,15 @@ class Plan {
 // sweeps (measured 1.7..17 n on the fc3d problems and the scenes). On an LCP newton's
 // active-set path is a few Cholesky steps: the probe's ten. apgd's iteration is one product
 // with W, about a sweep, and where Gauss-Seidel's rate is good apgd needs 2..6x its
-// iterations: fifty. Others (Lemke, prox, a fixed plan): ten.
-int probeAllowance(const Plan& plan, const SolveContext& ctx, bool friction) {
+// iterations: fifty; before newton behind an apgd scout, the smaller of newton's and apgd's
+// (the scout is the member the probe's sweeps would save first). Others (Lemke, prox, a fixed
+// plan): ten.
+int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction) {
   switch (plan.front()) {
-    case SolverKind::kNewton:
-      return friction ? std::max(kAutoProbeSweeps, ctx.problem->rowCount()) : kAutoProbeSweeps;
+    case SolverKind::kNewton: {
+      const int newton = friction ? std::max(kAutoProbeSweeps, ctx.problem->rowCount()) : kAutoProbeSweeps;
+      return scout ? std::min(newton, kAutoProbeApgdSweeps) : newton;
+    }
     case SolverKind::kApgd: return kAutoProbeApgdSweeps;
     default: return kAutoProbeSweeps;
   }
@@ -754,7 +758,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         const double needed = iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations);
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
         int allowance = kAutoProbeSweeps;
-        if (probe_sweeps + 2.0 * needed > allowance) allowance = probeAllowance(planned(), ctx, friction);
+        if (probe_sweeps + 2.0 * needed > allowance) {
+          const Plan& plan_now = planned();  // sets plan_scout: measured before it is read
+          allowance = probeAllowance(plan_now, plan_scout && by_residual, ctx, friction);
+        }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
           stage_start = best_residual;

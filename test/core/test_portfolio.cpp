@@ -363,6 +363,27 @@ TEST(Portfolio, AnApgdScoutGoesBeforeNewtonOnMultiPointContacts) {
   ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
   EXPECT_EQ(afterProbe(s).rfind("auto:apgd->newton", 0), 0u) << s.solver;
   EXPECT_LE(recomputedResidual(stack, s), tol);
+  // The probe before a scout stops within apgd's allowance (50 sweeps), not one sweep per row
+  // as before newton alone: the scout's first residuals are apgd's own from zero, found in
+  // the history right after the probe's.
+  const Problem tall = boxStack(12, 4, 1.0, 0.5, 0.8);  // 144 rows: newton's allowance would be 144
+  for (const auto& [p, at] : {std::pair{&pyramid, tol}, {&stack, tol}, {&tall, 1e-5}}) {
+    SolverParams traced = params(SolverKind::kAuto, at, 100000);
+    traced.displayDebug = true;
+    const SolveResult t = solveProblem(*p, traced);
+    ASSERT_TRUE(t.converged) << t.solver << ": " << t.message;
+    EXPECT_LE(recomputedResidual(*p, t), at);
+    traced.solver = SolverKind::kApgd;
+    const SolveResult own = solveProblem(*p, traced);
+    ASSERT_GE(own.residual_history.size(), 10u);
+    std::size_t probe_sweeps = 0;
+    for (std::size_t k = 1; k + 10 <= t.residual_history.size() && probe_sweeps == 0; ++k)
+      if (std::equal(own.residual_history.begin(), own.residual_history.begin() + 10,
+                     t.residual_history.begin() + static_cast<long>(k)))
+        probe_sweeps = k;
+    EXPECT_GT(probe_sweeps, 0u) << t.solver;
+    EXPECT_LE(probe_sweeps, 50u) << t.solver << " " << p->rowCount() << " rows";
+  }
 }
 
 // Four frictional contacts whose normal rows couple their neighbours (κ = 0.3: above the
