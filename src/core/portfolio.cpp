@@ -348,7 +348,6 @@ double sparseCoupling(const SolveContext& ctx, const BlockSparseMatrix& W, doubl
   return active > 0 ? sum / active : 0.0;
 }
 
-// `known_symmetric`: W's symmetry when the caller measured it already (-1: not measured).
 // normalCoupling's κ on a dense symmetric W, column by column (contiguous; a column's sum is
 // its row's), read only until it is known to reach `enough`, as sparseCoupling: on MuJoCo's
 // dense pyramidal islands the full pass cost a fifth of newton's solve.
@@ -378,7 +377,8 @@ double denseSymmetricCoupling(const SolveContext& ctx, const Eigen::MatrixXd& W,
 // block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed symmetric:
 // comparing every island's blocks cost as much as newton's whole solve on MuJoCo's steps, and
 // newton tests the symmetry itself before its active-set path (a non-symmetric W gets its
-// general semismooth path, then Lemke on a stall).
+// general semismooth path, then Lemke on a stall). `known_symmetric`: W's symmetry when the
+// caller measured it already (-1: not measured).
 AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, int known_symmetric) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
@@ -532,9 +532,6 @@ double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda)
   return naturalMapResidual(*ctx.problem, ctx.mu, lambda, ctx.problem->d_free, ctx.ignored);
 }
 
-// What one solve's portfolio needs besides its report, kept per thread (islands run on a
-// pool) so that a microsecond island pays no allocation for it after the first solve: the
-// member context (its vectors assigned in place) and the iterates.
 struct PortfolioMember {
   SolverKind kind;
   int slice;
@@ -545,6 +542,9 @@ struct PortfolioMember {
   bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
 };
 
+// What one solve's portfolio needs besides its report, kept per thread (islands run on a
+// pool) so that a microsecond island pays no allocation for it after the first solve: the
+// members, the member context (its vectors assigned in place) and the iterates.
 struct Workspace {
   std::vector<PortfolioMember> members;
   SolveContext member;
