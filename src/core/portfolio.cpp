@@ -244,19 +244,15 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   const int nc = static_cast<int>(p.contacts.size());
   // Scratch kept per thread: no allocation on a microsecond solve after the first.
   thread_local std::vector<double> scratch;
-  thread_local std::vector<char> redundant, active_contact;
-  thread_local std::vector<double> active_weight;  // 1 or 0: the LCP loop below without branches
+  thread_local std::vector<char> redundant;
+  thread_local std::vector<double> active_weight;  // 1 or 0 (ignored): the LCP loop below without branches
   // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
   thread_local std::vector<CouplingSet> coupled;
   scratch.assign(3 * static_cast<std::size_t>(nc), 0.0);
   redundant.assign(redundancy ? nc : 0, 0);
   coupled.assign(redundancy ? nc : 0, CouplingSet{});
-  active_contact.resize(nc);
   active_weight.resize(nc);
-  for (int i = 0; i < nc; ++i) {
-    active_contact[i] = ctx.ignored[i] ? 0 : 1;
-    active_weight[i] = active_contact[i];
-  }
+  for (int i = 0; i < nc; ++i) active_weight[i] = ctx.ignored[i] ? 0.0 : 1.0;
   double* diag = scratch.data();
   double* off_sum = diag + nc;
   double* lower_sum = off_sum + nc;
@@ -274,7 +270,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   if (dense) {
     const int* offsets = ctx.offsets.data();
     for (int j = 0; j < nc; ++j) {
-      if (!active_contact[j]) continue;
+      if (active_weight[j] == 0.0) continue;
       const double* column = dense->data() + static_cast<std::ptrdiff_t>(offsets[j]) * dense->rows();
       if (!redundancy) {  // an LCP: only κ and the Gauss-Seidel bound, branch-free loops
         for (int i = 0; i < j; ++i) off_sum[i] += active_weight[i] * std::abs(column[offsets[i]]);
@@ -286,7 +282,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
         continue;
       }
       for (int i = 0; i < nc; ++i)
-        if (i != j && active_contact[i]) visit(i, j, column[offsets[i]]);
+        if (i != j && active_weight[i] != 0.0) visit(i, j, column[offsets[i]]);
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
     for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
@@ -475,7 +471,8 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
                     : Plan{K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
   if (f.rows <= newton_rows) {
-    // Multi-point or rank-deficient contacts: apgd scouts first (below).
+    // Multi-point or rank-deficient contacts: apgd scouts first (below). Reached under the
+    // residual rule only (any other is `loose`), which the scout's rate test needs.
     *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
     return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   }
@@ -578,7 +575,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   std::vector<PortfolioMember>& members = work.members;
   members.clear();
   Plan plan;                     // measured once, when first needed
-  bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton
+  bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton (residual rule only)
   int known_symmetric = -1;      // W's symmetry once measured (LCPs)
   auto planned = [&]() -> const Plan& {
     if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout, known_symmetric);
@@ -587,7 +584,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   auto startPlan = [&] {
     members.clear();
     for (SolverKind kind : planned()) members.push_back({kind, firstSlice(kind)});
-    if (plan_scout && by_residual) {
+    if (plan_scout) {
       PortfolioMember apgd{SolverKind::kApgd, kAutoScoutFirst};
       apgd.scout = true;
       members.insert(members.begin(), apgd);
@@ -760,7 +757,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         int allowance = kAutoProbeSweeps;
         if (probe_sweeps + 2.0 * needed > allowance) {
           const Plan& plan_now = planned();  // sets plan_scout: measured before it is read
-          allowance = probeAllowance(plan_now, plan_scout && by_residual, ctx, friction);
+          allowance = probeAllowance(plan_now, plan_scout, ctx, friction);
         }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);

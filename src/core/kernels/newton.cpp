@@ -437,8 +437,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   SolveContext burst_ctx = warm_ctx;
   burst_ctx.params = &burst_params;
   report.status = SolveStatus::kMaxIterations;
+  double burst_residual = std::numeric_limits<double>::infinity();  // the last burst's
   // Up to max_sweeps nlgs sweeps from the best iterate; false when the budget ran out.
-  double burst_residual = std::numeric_limits<double>::infinity();
   auto burst = [&](int max_sweeps) {
     lambda = best;
     burst_params.tolerance = std::max(params.tolerance, kBurstReduction * best_residual);
