@@ -2,6 +2,7 @@
 
 #include "kernel_dispatch.h"
 #include "kernels/local_contact_laws.h"
+#include "kernels/newton_symmetric.h"
 
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/residual.h"
@@ -133,6 +134,19 @@ int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool f
 double iterationsToReach(double tolerance, double from, double to, int iterations) {
   const double per_iteration = std::pow(to / from, 1.0 / iterations);
   return std::log(tolerance / to) / std::log(per_iteration);
+}
+
+// After the probe's first stage, newton's sticking active-set path (newton_symmetric.h) is
+// tried where it applies (W assembled, gathered dense) when the probe's iterate says every
+// contact sticks (a scene at rest) and Gauss-Seidel would need more sweeps than the path's
+// Cholesky steps cost: n³/3 flops against a sweep's n², i.e. n/3 sweeps, and at least
+// kAutoStickFixedSweeps for its set-up on small problems. The sweeps needed are twice what
+// the probe's rate says, as for the probe's own stages. Where a contact slides after all,
+// the plan goes on from the probe's iterate.
+constexpr double kAutoStickFixedSweeps = 10.0;
+bool stickingPays(const SolveContext& ctx, const Eigen::VectorXd& lambda, double needed_sweeps) {
+  const double cost = std::max(kAutoStickFixedSweeps, ctx.problem->rowCount() / 3.0);
+  return 2.0 * needed_sweeps > cost && stickingPathApplies(ctx) && allSticking(ctx, lambda);
 }
 
 struct AutoFeatures {
@@ -749,10 +763,28 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (cur.probe) {
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
+      const double needed = r.iterations > 0 && best_residual < stage_start
+                                ? iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations)
+                                : std::numeric_limits<double>::infinity();
+      if (probe_sweeps == 0 && friction && !failedToRun(r.status) && stickingPays(ctx, best, needed)) {
+        const Clock::time_point s0 = Clock::now();
+        member_params.maxIt = params.maxIt - used;  // the member context, with the whole deadline
+        member.deadline = ctx.deadline;
+        KernelReport stick;
+        x = best;
+        const bool solved = solveStickingActiveSet(member, x, &stick);
+        stages->emplace_back("active-set", std::chrono::duration<double>(Clock::now() - s0).count());
+        used += stick.iterations;
+        if (solved) {
+          best.swap(x);
+          best_residual = best_error = stick.solver_error;
+          report.status = SolveStatus::kConverged;
+          break;
+        }
+      }
       probe_sweeps += r.iterations;
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
-        const double needed = iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations);
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
         int allowance = kAutoProbeSweeps;
         if (probe_sweeps + 2.0 * needed > allowance) {

@@ -1,4 +1,5 @@
-// Islands (core/islands.h) and the symmetric active-set Newton (newton_symmetric.cpp):
+// Islands (core/islands.h) and the symmetric active-set Newton (newton_symmetric.cpp, its
+// LCP and sticking paths):
 // the islands of a W made of independent groups are found (contacts interleaved across
 // groups); solving by island gives the whole problem's forces (exactly for a fixed number
 // of Gauss-Seidel sweeps, to 1e-10 for unique solutions at tight tolerance), and the same
@@ -434,6 +435,85 @@ TEST(SymmetricNewton, RankDeficientWStillSolved) {
   EXPECT_LE(recomputedResidual(line, one.forces), 1e-10);
   EXPECT_NEAR(one.forces.sum(), 1.0, 1e-12);
   EXPECT_GE(one.forces.minCoeff(), 0.0);
+}
+
+// ---- the sticking active-set path ---------------------------------------------------------
+
+// Frictional contacts at rest: d_free = u - W λ* with every λ* pressed and strictly inside
+// its cone and u = 0 (every contact sticks), except `sliding`, whose force is on the cone's
+// edge against a tangential velocity it keeps (u_t opposite λ_t): it slides. Both are the
+// conditions Coulomb's law states, so λ* solves the problem by construction.
+struct Resting {
+  Problem problem;
+  Eigen::VectorXd star;
+};
+
+Resting resting(int contacts, unsigned seed, double delta, int dof, int sliding = -1) {
+  Resting r;
+  r.problem = generate(1, contacts, Kinds::kFrictional, seed, delta, dof).problem;
+  const std::vector<int> off = r.problem.rowOffsets();
+  const Eigen::MatrixXd W = std::get<Eigen::MatrixXd>(r.problem.W);
+  r.star.resize(off.back());
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(off.back());
+  for (int i = 0; i < contacts; ++i) {
+    const double normal = 0.5 + 0.1 * i, angle = 0.7 * i;
+    const double mu = r.problem.contacts[i].mu;
+    const double t = (i == sliding ? 1.0 : 0.5) * mu * normal;
+    r.star.segment<3>(off[i]) << normal, t * std::cos(angle), t * std::sin(angle);
+    if (i == sliding) u.segment<2>(off[i] + 1) << -0.2 * std::cos(angle), -0.2 * std::sin(angle);
+  }
+  r.problem.d_free = u - W * r.star;
+  return r;
+}
+
+// Resting contacts: the sticking path, one Cholesky step after the warm-up. A contact that
+// slides: the answer cannot be that path's (u_t = 0 on every contact), and the general
+// Newton reaches the constructed solution.
+TEST(StickingNewton, RestingContactsTakeTheStickingPathASlidingOneDoesNot) {
+  struct Case {
+    unsigned seed;
+    int sliding;
+  };
+  for (const Case c : {Case{61, -1}, Case{62, -1}, Case{63, -1}, Case{64, 2}}) {
+    SCOPED_TRACE(c.seed);
+    const bool sticks = c.sliding < 0;
+    const Resting r = resting(6, c.seed, 1e-3, 24, c.sliding);
+    const SolveResult s = solveProblem(r.problem, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
+    ASSERT_TRUE(s.converged) << s.message;
+    EXPECT_EQ(s.message.find("sticking active-set") != std::string::npos, sticks) << s.message;
+    EXPECT_LE(recomputedResidual(r.problem, s.forces), 1e-10);
+    EXPECT_LE(maxDiff(s.forces, r.star), sticks ? 1e-8 : 1e-6);
+  }
+}
+
+// Sticking rows beyond the bodies' degrees of freedom with no diagonal shift (18 rows, 12
+// DoF): the forces are not unique (W_AA singular, which the sticking path declines), and
+// newton still reaches the tolerance.
+TEST(StickingNewton, SingularStickingRowsAreStillSolved) {
+  const Resting r = resting(6, 65, 0.0, 12);
+  const SolveResult s = solveProblem(r.problem, paramsFor(SolverKind::kNewton, 1e-9, 5000, false));
+  ASSERT_TRUE(s.converged) << s.message;
+  EXPECT_LE(recomputedResidual(r.problem, s.forces), 1e-9);
+}
+
+// auto tries the path after its Gauss-Seidel probe where the probe's iterate sticks and the
+// tolerance is out of the sweeps' cheap reach; not at a loose tolerance.
+TEST(StickingNewton, AutoEndsARestingProblemWithIt) {
+  const Resting r = resting(8, 66, 1e-3, 30);
+  SolverParams tight = paramsFor(SolverKind::kAuto, 1e-10, 100000, false);
+  const SolveResult s = solveProblem(r.problem, tight);
+  ASSERT_TRUE(s.converged) << s.message;
+  EXPECT_EQ(s.solver, "auto:nlgs->active-set");
+  EXPECT_LE(recomputedResidual(r.problem, s.forces), 1e-10);
+  EXPECT_LE(maxDiff(s.forces, r.star), 1e-8);
+  const SolveResult loose = solveProblem(r.problem, paramsFor(SolverKind::kAuto, 1e-1, 100000, false));
+  ASSERT_TRUE(loose.converged) << loose.message;
+  EXPECT_EQ(loose.solver.find("active-set"), std::string::npos) << loose.solver;
+  EXPECT_LE(recomputedResidual(r.problem, loose.forces), 1e-1);
+  const Resting slide = resting(8, 67, 1e-3, 30, 5);
+  const SolveResult slid = solveProblem(slide.problem, tight);
+  ASSERT_TRUE(slid.converged) << slid.message;
+  EXPECT_LE(recomputedResidual(slide.problem, slid.forces), 1e-10);
 }
 
 }  // namespace

@@ -403,6 +403,22 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     report.message = warm.message;
     return report;
   }
+  // The warm-up says every contact sticks (a scene at rest): the sticking active-set path
+  // solves that in a Cholesky step or two; when some contact slides after all, the Newton
+  // below goes on from the warm-up's iterate.
+  int stick_steps = 0;
+  if (symmetric_steps == 0 && allSticking(ctx, lambda)) {
+    KernelReport stick;
+    Eigen::VectorXd trial = lambda;
+    const bool solved = solveStickingActiveSet(ctx, trial, &stick);
+    stick_steps = stick.iterations;
+    if (solved) {
+      lambda = trial;
+      stick.iterations += warm_sweeps;
+      stick.history = report.history;
+      return stick;
+    }
+  }
 
   const std::vector<NewtonContact> contacts = newtonContacts(ctx);
   std::vector<JacobianBlocks> blocks(contacts.size());
@@ -587,7 +603,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
   }
   if (!lambda.allFinite() || report.status != SolveStatus::kConverged) lambda = best;
-  report.iterations = symmetric_steps + sweeps + newton_steps;
+  report.iterations = symmetric_steps + stick_steps + sweeps + newton_steps;
   if (report.message.empty())
     report.message =
         std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";

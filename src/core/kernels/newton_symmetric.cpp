@@ -18,6 +18,18 @@
 // can cycle, so it is capped and runNewton's globalised Newton continues from the best
 // iterate.
 //
+// Sticking contacts (a scene at rest). A frictional contact that sticks has u = 0 on all
+// three rows: its tangent rows are equalities, as a bilateral contact's, tied to its normal
+// row's activity (λ_t = 0 where the contact opens). The same iteration then solves for
+// every contact sticking at once, and the natural-map residual (cone included) decides:
+// exact when the set is right and every ‖λ_t‖ <= μ λ_n, a failure (some contact slides)
+// otherwise, found as soon as the normal set repeats. Resting robots and piles (MuJoCo's
+// humanoids: every contact sticks) end in one or two Cholesky steps where Gauss-Seidel
+// needs a sweep per digit and the general Newton several LU steps. Only where W_AA is
+// gathered dense, and only positive definite: singular sticking rows (a face's corners on a
+// rigid stack, no diagonal shift) have many force solutions, and the cone test of the one a
+// pivoted LDLᵀ picks says nothing about the others.
+//
 // Factorisation: small or dense W: W_AA gathered into a dense matrix (Eigen's blocked LLᵀ,
 // several times faster than its unblocked LDLᵀ at a few hundred rows). A W_AA that is only
 // semidefinite (redundant rows, no diagonal shift) gets a pivoted LDLᵀ whose zero pivots
@@ -45,13 +57,21 @@ namespace lcp_contact_solver::core {
 namespace {
 
 constexpr int kMaxSteps = 30;
+// Sticking: the normal set settles in a few steps or a contact slides; no cycling allowed.
+constexpr int kMaxStickSteps = 8;
+// A friction force this close to its cone's edge is taken as sliding (Gauss-Seidel puts a
+// sliding contact's force on the edge, to round-off).
+constexpr double kStrictlyInside = 1.0 - 1e-6;
 constexpr double kSymmetryTolerance = 1e-10;  // |W_ij - W_ji| relative to the largest |W_ii|
 constexpr int kDenseMaxRows = 128;            // block-sparse W up to this size (or ≥ 1/4 full) goes dense
 
-enum class Role : std::uint8_t { kZero, kUnilateral, kEquality };
+// kTangent: a friction row of a contact assumed to stick, active exactly when its normal
+// row (the row before it, through tangent 1) is.
+enum class Role : std::uint8_t { kZero, kUnilateral, kEquality, kTangent };
 
-// Row roles; false when some active contact is not an LCP row.
-bool rowRoles(const SolveContext& ctx, std::vector<Role>* roles) {
+// Row roles; false when some active contact is not an LCP row (with `stick`: a frictional
+// contact whose friction rows are taken as sticking equalities is one).
+bool rowRoles(const SolveContext& ctx, bool stick, std::vector<Role>* roles) {
   const Problem& p = *ctx.problem;
   roles->assign(ctx.offsets.back(), Role::kZero);
   for (std::size_t i = 0; i < p.contacts.size(); ++i) {
@@ -61,8 +81,11 @@ bool rowRoles(const SolveContext& ctx, std::vector<Role>* roles) {
     switch (c.type) {
       case ContactType::kFrictionless: (*roles)[off] = Role::kUnilateral; break;
       case ContactType::kFrictional:
-        if (ctx.mu[i] != 0.0) return false;
-        (*roles)[off] = Role::kUnilateral;  // tangent rows stay zero
+        (*roles)[off] = Role::kUnilateral;  // with μ = 0 the tangent rows stay zero
+        if (ctx.mu[i] != 0.0) {
+          if (!stick) return false;
+          (*roles)[off + 1] = (*roles)[off + 2] = Role::kTangent;
+        }
         break;
       case ContactType::kBilateral:
         for (int k = 0; k < c.rows; ++k) (*roles)[off + k] = Role::kEquality;
@@ -76,8 +99,9 @@ bool rowRoles(const SolveContext& ctx, std::vector<Role>* roles) {
 class ReducedSystem {
  public:
   virtual ~ReducedSystem() = default;
-  // Factorises W_AA (+ r I); false when it is not positive definite.
-  virtual bool factorize(const std::vector<char>& active) = 0;
+  // Factorises W_AA (+ r I); false when it is not positive definite (or, with
+  // `semidefinite`, not positive semidefinite).
+  virtual bool factorize(const std::vector<char>& active, bool semidefinite) = 0;
   // x_A = W_AA⁻¹ rhs_A, x_I = 0.
   virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
   // u = (W + r I) λ, from the system's own copy (dense for small W: no block loop).
@@ -108,7 +132,7 @@ class DenseReduced : public ReducedSystem {
     if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
   }
   Eigen::Map<Eigen::MatrixXd> W() { return {s_.W.data(), n_, n_}; }
-  bool factorize(const std::vector<char>& active) override {
+  bool factorize(const std::vector<char>& active, bool semidefinite) override {
     s_.index.clear();
     for (int i = 0; i < n_; ++i)
       if (active[i]) s_.index.push_back(i);
@@ -122,7 +146,7 @@ class DenseReduced : public ReducedSystem {
     semidefinite_ = false;
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(M);
     if (llt.info() == Eigen::Success) return true;
-    return factorizeSemidefinite();
+    return semidefinite && factorizeSemidefinite();
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
     x.setZero(rhs.size());
@@ -190,7 +214,7 @@ class SparseReduced : public ReducedSystem {
   explicit SparseReduced(Eigen::SparseMatrix<double> S) : S_(std::move(S)), K_(S_) {
     ldlt_.analyzePattern(K_);
   }
-  bool factorize(const std::vector<char>& active) override {
+  bool factorize(const std::vector<char>& active, bool /*semidefinite: not handled*/) override {
     const int n = static_cast<int>(S_.cols());
     const double* w = S_.valuePtr();
     double* k = K_.valuePtr();
@@ -215,15 +239,19 @@ class SparseReduced : public ReducedSystem {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
 };
 
+// W_AA is gathered dense (small, dense, or block-sparse at least a quarter full).
+bool denseSystem(const SolveContext& ctx) {
+  const int n = ctx.offsets.back();
+  const auto* blocks = std::get_if<BlockSparseMatrix>(&ctx.problem->W);
+  return blocks == nullptr || n <= kDenseMaxRows || 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
+}
+
 // W + r I as a system, or null when W is not symmetric to kSymmetryTolerance.
 std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   const Problem& p = *ctx.problem;
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  const auto* blocks = std::get_if<BlockSparseMatrix>(&p.W);
-  const bool dense_pattern =
-      blocks != nullptr && 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
-  if (dense != nullptr || n <= kDenseMaxRows || dense_pattern) {
+  if (denseSystem(ctx)) {
     auto system = std::make_unique<DenseReduced>(denseScratch(), n);
     Eigen::Map<Eigen::MatrixXd> W = system->W();
     if (dense != nullptr) {
@@ -274,19 +302,15 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   return std::make_unique<SparseReduced>(std::move(S));
 }
 
-}  // namespace
-
-bool symmetricLcp(const SolveContext& ctx) {
-  std::vector<Role> roles;
-  return !ctx.problem->bodies && rowRoles(ctx, &roles);
-}
-
-bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
+// The active-set iteration of solveSymmetricActiveSet / solveStickingActiveSet.
+bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::VectorXd& lambda,
+                     KernelReport* report) {
   const Problem& problem = *ctx.problem;
   const SolverParams& params = *ctx.params;
   report->iterations = 0;
   std::vector<Role> roles;
-  if (problem.bodies || !rowRoles(ctx, &roles)) return false;
+  if (problem.bodies || !rowRoles(ctx, stick, &roles)) return false;
+  if (stick && !denseSystem(ctx)) return false;  // see stickingPathApplies
   std::unique_ptr<ReducedSystem> system = makeSystem(ctx);
   if (!system) return false;
   const int n = ctx.offsets.back();
@@ -309,15 +333,21 @@ bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, K
   }
   std::vector<char> active(n, 0), next(n, 0);
   auto chooseSet = [&](const Eigen::VectorXd& l, std::vector<char>& set) {
-    for (int i = 0; i < n; ++i)
-      set[i] = roles[i] == Role::kEquality || (roles[i] == Role::kUnilateral && l[i] - rho[i] * u[i] > 0.0);
+    for (int i = 0; i < n; ++i) {
+      switch (roles[i]) {
+        case Role::kEquality: set[i] = 1; break;
+        case Role::kUnilateral: set[i] = l[i] - rho[i] * u[i] > 0.0; break;
+        case Role::kTangent: set[i] = set[i - 1]; break;
+        case Role::kZero: set[i] = 0; break;
+      }
+    }
   };
   chooseSet(lambda, active);
   bool refined = false;
-  for (int step = 0; step < kMaxSteps && step < params.maxIt; ++step) {
+  for (int step = 0; step < max_steps && step < params.maxIt; ++step) {
     if (step > 0 && ctx.deadlinePassed()) break;
     ++report->iterations;
-    if (!system->factorize(active)) break;  // W_AA singular: forces not unique
+    if (!system->factorize(active, !stick)) break;  // W_AA singular: forces not unique
     for (int i = 0; i < n; ++i) rhs[i] = active[i] ? -problem.d_free[i] : 0.0;
     system->solve(rhs, x);
     if (!x.allFinite()) break;
@@ -342,15 +372,53 @@ bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, K
     if (residual <= params.tolerance) {
       report->status = SolveStatus::kConverged;
       report->solver_error = residual;
-      report->message =
-          "active-set Newton on symmetric W (Cholesky): " + std::to_string(report->iterations) + " steps";
+      report->message = std::string(stick ? "sticking " : "") + "active-set Newton on symmetric W (Cholesky): " +
+                        std::to_string(report->iterations) + " steps";
       return true;
     }
-    if (next == active) break;  // the set is right but the tolerance is out of reach
+    // The set is right but the tolerance is out of reach (with `stick`: some contact's
+    // friction leaves its cone, so it slides).
+    if (next == active) break;
     active.swap(next);
   }
   lambda = best;
   return false;
+}
+
+}  // namespace
+
+bool symmetricLcp(const SolveContext& ctx) {
+  std::vector<Role> roles;
+  return !ctx.problem->bodies && rowRoles(ctx, false, &roles);
+}
+
+bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
+  return activeSetNewton(ctx, false, kMaxSteps, lambda, report);
+}
+
+bool allSticking(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  const Problem& p = *ctx.problem;
+  bool any = false;
+  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+    if (ctx.ignored[i] || ctx.mu[i] == 0.0) continue;
+    if (p.contacts[i].type != ContactType::kFrictional) {
+      if (hasSlidingFriction(p.contacts[i].type)) return false;
+      continue;
+    }
+    const int off = ctx.offsets[i];
+    const double normal = lambda[off];
+    if (!(normal > 0.0)) continue;
+    const double tangent = std::hypot(lambda[off + 1], lambda[off + 2]);
+    if (!(tangent < kStrictlyInside * ctx.mu[i] * normal)) return false;
+    any = true;
+  }
+  return any;
+}
+
+bool stickingPathApplies(const SolveContext& ctx) { return !ctx.problem->bodies && denseSystem(ctx); }
+
+bool solveStickingActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
+  return activeSetNewton(ctx, true, kMaxStickSteps, lambda, report);
 }
 
 }  // namespace lcp_contact_solver::core
