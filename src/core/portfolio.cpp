@@ -234,8 +234,8 @@ struct CouplingSet {
 // the same contacts: several contact points between the same bodies (a face on a face or on the
 // ground), more rows than those bodies' degrees of freedom. A set holding every active contact
 // says nothing (one body, or a deformable one whose compliance couples everything).
-double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& coupled, int active) {
-  thread_local std::vector<CouplingSet> sets;  // per thread: no allocation after the first solve
+double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& coupled, std::vector<CouplingSet>& sets,
+                       int active) {
   sets.clear();
   for (std::size_t i = 0; i < coupled.size(); ++i) {
     if (ctx.ignored[i]) continue;
@@ -251,17 +251,31 @@ double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& couple
   return static_cast<double>(grouped) / active;
 }
 
+// normalCoupling's scratch, kept per thread: no allocation on a microsecond solve after the
+// first. Reached through one call, not by name: in a shared library the compiler recomputes a
+// thread_local's address (a call) wherever it reuses it, in the loops over W too.
+struct CouplingScratch {
+  std::vector<double> sums;
+  std::vector<char> redundant;
+  std::vector<double> active_weight;  // 1 or 0 (ignored): the LCP loop below without branches
+  // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
+  std::vector<CouplingSet> coupled, sets;
+};
+[[gnu::noinline]] CouplingScratch& couplingScratch() {
+  thread_local CouplingScratch scratch;
+  return scratch;
+}
+
 // `redundancy`: also the share of nearly parallel normals and of multi-point contacts (only
 // the frictional plan reads them).
 Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
-  // Scratch kept per thread: no allocation on a microsecond solve after the first.
-  thread_local std::vector<double> scratch;
-  thread_local std::vector<char> redundant;
-  thread_local std::vector<double> active_weight;  // 1 or 0 (ignored): the LCP loop below without branches
-  // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
-  thread_local std::vector<CouplingSet> coupled;
+  CouplingScratch& work = couplingScratch();
+  std::vector<double>& scratch = work.sums;
+  std::vector<char>& redundant = work.redundant;
+  std::vector<double>& active_weight = work.active_weight;
+  std::vector<CouplingSet>& coupled = work.coupled;
   scratch.assign(3 * static_cast<std::size_t>(nc), 0.0);
   redundant.assign(redundancy ? nc : 0, 0);
   coupled.assign(redundancy ? nc : 0, CouplingSet{});
@@ -327,7 +341,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
     c.kappa = sum / active;
     c.gs_bound = gs_bound;
     c.redundant = static_cast<double>(repeated) / active;
-    if (redundancy) c.multi_point = multiPointShare(ctx, coupled, active);
+    if (redundancy) c.multi_point = multiPointShare(ctx, coupled, work.sets, active);
   }
   return c;
 }

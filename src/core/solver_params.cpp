@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -94,13 +95,13 @@ std::string validateParams(const SolverParams& p) {
   if (!std::isfinite(p.sor) || p.sor <= 0.0 || p.sor >= 2.0) return "sor must be a number in (0, 2)";
   if (!nonNegative(p.time_budget)) return "time_budget must be a finite number >= 0 (0 disables it)";
   if (p.threads < 0) return "threads must be >= 0 (0 = the core count)";
-  if (std::string(frictionModelName(p.friction_model)) == "unknown")
+  if (std::strcmp(frictionModelName(p.friction_model), "unknown") == 0)
     return "friction_model is not a known model";
-  if (std::string(solverName(p.solver)) == "unknown") return "solver is not a known solver";
+  if (std::strcmp(solverName(p.solver), "unknown") == 0) return "solver is not a known solver";
   if (!std::isfinite(p.erp) || p.erp < 0.0 || p.erp > 1.0) return "erp must be a number in [0, 1]";
   if (!nonNegative(p.softness)) return "softness must be a finite number >= 0";
   if (!nonNegative(p.time_step)) return "time_step must be a finite number >= 0";
-  if (std::string(constraintLevelName(p.constraint_level)) == "unknown")
+  if (std::strcmp(constraintLevelName(p.constraint_level), "unknown") == 0)
     return "constraint_level is not a known level";
   return "";
 }

@@ -106,7 +106,7 @@ class ReducedSystem {
   virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
   // u = (W + r I) λ, from the system's own copy (dense for small W: no block loop).
   virtual void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const = 0;
-  virtual Eigen::VectorXd diagonal() const = 0;  // of W + r I
+  virtual void diagonal(Eigen::VectorXd& d) const = 0;  // of W + r I
 };
 
 // Dense storage of one solve, kept per thread: the islands of a solve (and the solves of a
@@ -114,6 +114,8 @@ class ReducedSystem {
 struct DenseScratch {
   std::vector<double> W, M, b;
   std::vector<int> index;
+  std::unique_ptr<Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>> ldlt;  // the semidefinite case
+  Eigen::MatrixXd A;
 };
 
 DenseScratch& denseScratch() {
@@ -130,6 +132,10 @@ class DenseReduced : public ReducedSystem {
     constexpr std::size_t kKeep = 256 * 256;
     if (s_.W.capacity() > kKeep) std::vector<double>().swap(s_.W);
     if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
+    if (s_.A.size() > static_cast<Eigen::Index>(kKeep)) {
+      s_.A.resize(0, 0);
+      s_.ldlt.reset();
+    }
   }
   Eigen::Map<Eigen::MatrixXd> W() { return {s_.W.data(), n_, n_}; }
   bool factorize(const std::vector<char>& active, bool semidefinite) override {
@@ -166,8 +172,8 @@ class DenseReduced : public ReducedSystem {
   void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
     u.noalias() = Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_) * lambda;
   }
-  Eigen::VectorXd diagonal() const override {
-    return Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_).diagonal();
+  void diagonal(Eigen::VectorXd& d) const override {
+    d = Eigen::Map<const Eigen::MatrixXd>(s_.W.data(), n_, n_).diagonal();
   }
 
  private:
@@ -178,11 +184,13 @@ class DenseReduced : public ReducedSystem {
   // here for the general Newton (2x the time on a 2-row rank-1 LCP). Indefinite: false.
   bool factorizeSemidefinite() {
     const Eigen::Map<const Eigen::MatrixXd> W(s_.W.data(), n_, n_);
-    Eigen::MatrixXd A(m_, m_);
+    Eigen::MatrixXd& A = s_.A;
+    A.resize(m_, m_);
     for (int c = 0; c < m_; ++c)
       for (int r = c; r < m_; ++r) A(r, c) = W(s_.index[r], s_.index[c]);
-    ldlt_.compute(A);
-    const Eigen::VectorXd& D = ldlt_.vectorD();
+    if (!s_.ldlt) s_.ldlt = std::make_unique<Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>>();
+    s_.ldlt->compute(A);
+    const Eigen::VectorXd& D = s_.ldlt->vectorD();
     const double largest = D.cwiseAbs().maxCoeff();
     if (!(largest > 0.0) || !D.allFinite()) return false;
     zero_pivot_ = kZeroPivot * largest;
@@ -192,12 +200,12 @@ class DenseReduced : public ReducedSystem {
   }
   // x = Pᵀ L⁻ᵀ D⁺ L⁻¹ P b, D⁺ dropping the zero pivots.
   void solveSemidefinite(Eigen::Map<Eigen::VectorXd>& b) const {
-    Eigen::VectorXd y = ldlt_.transpositionsP() * b;
-    ldlt_.matrixL().solveInPlace(y);
-    const Eigen::VectorXd& D = ldlt_.vectorD();
+    Eigen::VectorXd y = s_.ldlt->transpositionsP() * b;
+    s_.ldlt->matrixL().solveInPlace(y);
+    const Eigen::VectorXd& D = s_.ldlt->vectorD();
     for (int k = 0; k < m_; ++k) y[k] = D[k] > zero_pivot_ ? y[k] / D[k] : 0.0;
-    ldlt_.matrixU().solveInPlace(y);
-    b = ldlt_.transpositionsP().transpose() * y;
+    s_.ldlt->matrixU().solveInPlace(y);
+    b = s_.ldlt->transpositionsP().transpose() * y;
   }
   static constexpr double kZeroPivot = 1e-12;  // relative to the largest pivot
 
@@ -205,7 +213,6 @@ class DenseReduced : public ReducedSystem {
   int n_ = 0, m_ = 0;
   bool semidefinite_ = false;
   double zero_pivot_ = 0.0;
-  Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 
 class SparseReduced : public ReducedSystem {
@@ -232,7 +239,7 @@ class SparseReduced : public ReducedSystem {
   void multiply(const Eigen::VectorXd& lambda, Eigen::VectorXd& u) const override {
     u.noalias() = S_ * lambda;
   }
-  Eigen::VectorXd diagonal() const override { return S_.diagonal(); }
+  void diagonal(Eigen::VectorXd& d) const override { d = S_.diagonal(); }
 
  private:
   Eigen::SparseMatrix<double> S_, K_;
@@ -303,12 +310,28 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
 }
 
 // The active-set iteration of solveSymmetricActiveSet / solveStickingActiveSet.
+// The iteration's vectors, kept per thread: MuJoCo's islands and the microsecond LCPs run
+// this path once per solve, where its allocations had cost a fifth of the solve.
+struct ActiveSetScratch {
+  std::vector<Role> roles;
+  Eigen::VectorXd rho, u, rhs, x, correction, best;
+  std::vector<char> active, next;
+};
+
+// One thread-local lookup per solve. Not inlined: in a shared library the compiler otherwise
+// recomputes a thread_local's address (a call) wherever it reuses it (200 calls per solve).
+[[gnu::noinline]] ActiveSetScratch& activeSetScratch() {
+  thread_local ActiveSetScratch scratch;
+  return scratch;
+}
+
 bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::VectorXd& lambda,
                      KernelReport* report) {
   const Problem& problem = *ctx.problem;
   const SolverParams& params = *ctx.params;
   report->iterations = 0;
-  std::vector<Role> roles;
+  ActiveSetScratch& scratch = activeSetScratch();
+  std::vector<Role>& roles = scratch.roles;
   if (problem.bodies || !rowRoles(ctx, stick, &roles)) return false;
   if (stick && !denseSystem(ctx)) return false;  // see stickingPathApplies
   std::unique_ptr<ReducedSystem> system = makeSystem(ctx);
@@ -316,31 +339,32 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::
   const int n = ctx.offsets.back();
 
   // ρ_i = 1 / (W_ii + r): only the sign of λ_i - ρ_i u_i matters, ρ keeps it scale-free.
-  Eigen::VectorXd rho = system->diagonal();
+  Eigen::VectorXd& rho = scratch.rho;
+  system->diagonal(rho);
   for (int i = 0; i < n; ++i) rho[i] = rho[i] > 0.0 ? 1.0 / rho[i] : 1.0;
-  Eigen::VectorXd u, rhs(n), x, correction;
+  Eigen::VectorXd &u = scratch.u, &rhs = scratch.rhs, &x = scratch.x, &correction = scratch.correction;
+  rhs.resize(n);
   auto velocities = [&](const Eigen::VectorXd& l) {
     system->multiply(l, u);
     u += problem.d_free;
   };
   velocities(lambda);
   double best_residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
-  Eigen::VectorXd best = lambda;
+  Eigen::VectorXd& best = scratch.best;
+  best = lambda;
   if (best_residual <= params.tolerance) {  // the warm start solves it already
     report->status = SolveStatus::kConverged;
     report->solver_error = best_residual;
     return true;
   }
-  std::vector<char> active(n, 0), next(n, 0);
+  std::vector<char>& active = scratch.active;
+  std::vector<char>& next = scratch.next;
+  active.assign(n, 0);
+  next.assign(n, 0);
   auto chooseSet = [&](const Eigen::VectorXd& l, std::vector<char>& set) {
-    for (int i = 0; i < n; ++i) {
-      switch (roles[i]) {
-        case Role::kEquality: set[i] = 1; break;
-        case Role::kUnilateral: set[i] = l[i] - rho[i] * u[i] > 0.0; break;
-        case Role::kTangent: set[i] = set[i - 1]; break;
-        case Role::kZero: set[i] = 0; break;
-      }
-    }
+    for (int i = 0; i < n; ++i)  // a tangent row is never row 0: its normal row precedes it
+      set[i] = roles[i] == Role::kEquality || (roles[i] == Role::kUnilateral && l[i] - rho[i] * u[i] > 0.0) ||
+               (roles[i] == Role::kTangent && set[i - 1]);
   };
   chooseSet(lambda, active);
   bool refined = false;
