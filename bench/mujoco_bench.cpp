@@ -5,9 +5,10 @@
 //   mujoco_bench [--model PATH]... [--first N] [--count N] [--target R] [--repeat N]
 //                [--ours pgs,newton,apgd,lemke] [--mujoco pgs,cg,newton|none]
 //                [--storage auto|dense|block_sparse] [--lemke-max-rows N] [--csv FILE]
-//                [--threads N] [--islands on|off] [--mujoco-tolerance T]
+//                [--threads N] [--islands on|off] [--mujoco-tolerance T] [--cone pyramidal|elliptic]
 //
-// Default models: MuJoCo's 22_humanoids and humanoid100 (libmujoco-samples), pyramidal cone.
+// Default models: MuJoCo's 22_humanoids and humanoid100 (libmujoco-samples), pyramidal cone
+// (--cone elliptic: each contact a Coulomb disc, the problem no longer an LCP).
 // Each model runs a reference trajectory with MuJoCo's own default solver (Newton); the steps
 // first .. first+count−1 are measured. For each measured step (its state and MuJoCo's warm
 // start qacc_warmstart copied from the trajectory):
@@ -65,6 +66,7 @@ struct Options {
   int threads = 0;                // SolverParams::threads of ours (0 = the core count)
   bool islands = true;            // SolverParams::islands of ours
   double mujoco_tolerance = 0.0;  // > 0: MuJoCo's solvers also at their own stopping rule
+  std::string cone = "pyramidal";  // the models' cone: "pyramidal" (an LCP) or "elliptic" (discs)
 };
 
 struct Row {
@@ -155,7 +157,7 @@ int fewestIterations(const MujocoWorld& snapshot, MujocoWorld& scratch, const Mu
 
 void benchModel(const std::string& path, const Options& o, std::vector<Row>* rows) {
   MujocoOptions mo;
-  mo.cone = "pyramidal";
+  mo.cone = o.cone;
   std::string error;
   auto world = MujocoWorld::load(path, mo, &error);
   if (!world) {
@@ -309,6 +311,9 @@ int parseOptions(int argc, char** argv, Options* options) {
   app.add_option("--csv", o.csv, "the CSV to write (default: none)");
   app.add_option("--threads", o.threads, "threads of ours (0 = the core count)")->capture_default_str();
   app.add_option("--islands", islands, "on|off: islands of ours (anything but off is on)")
+      ->capture_default_str();
+  app.add_option("--cone", o.cone, "the models' friction cone (elliptic: Coulomb discs)")
+      ->check(CLI::IsMember({"pyramidal", "elliptic"}))
       ->capture_default_str();
   app.add_option("--mujoco-tolerance", o.mujoco_tolerance,
                  "T > 0: MuJoCo's solvers also at their own stopping rule")

@@ -144,6 +144,7 @@ double iterationsToReach(double tolerance, double from, double to, int iteration
 // the probe's rate says, as for the probe's own stages. Where a contact slides after all,
 // the plan goes on from the probe's iterate.
 constexpr double kAutoStickFixedSweeps = 10.0;
+constexpr int kAutoStickWarmRows = 128;  // a warm start that sticks: tried first up to this size
 bool stickingPays(const SolveContext& ctx, const Eigen::VectorXd& lambda, double needed_sweeps) {
   const double cost = std::max(kAutoStickFixedSweeps, ctx.problem->rowCount() / 3.0);
   return 2.0 * needed_sweeps > cost && stickingPathApplies(ctx) && allSticking(ctx, lambda);
@@ -673,6 +674,34 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     double residual = 0.0, error = 0.0;
     FrictionModel model = FrictionModel::kCoulombDisc;
   } scout;  // the apgd scout's state
+  // newton's sticking active-set path from `best`, once per solve (stickingPays); true when it
+  // ends the solve.
+  bool sticking_tried = false;
+  auto stickingPathSolves = [&]() {
+    sticking_tried = true;
+    const Clock::time_point s0 = Clock::now();
+    member_params.maxIt = params.maxIt - used;
+    member.params = &member_params;
+    member.has_deadline = ctx.has_deadline;
+    member.deadline = ctx.deadline;
+    KernelReport stick;
+    x = best;
+    const bool solved = solveStickingActiveSet(member, x, &stick);
+    stages->emplace_back("active-set", std::chrono::duration<double>(Clock::now() - s0).count());
+    used += stick.iterations;
+    if (!solved) return false;
+    best.swap(x);
+    best_residual = best_error = stick.solver_error;
+    report.status = SolveStatus::kConverged;
+    return true;
+  };
+  // A warm start in which every contact sticks (the last step of a scene at rest): its active
+  // set is usually still right, and the path then ends the solve in one Cholesky step where
+  // the probe's first sweeps would only confirm it. Up to kAutoStickWarmRows rows: a step on
+  // which a contact starts to slide pays one wasted Cholesky of at most that size (~40 sweeps).
+  if (by_residual && friction && ctx.problem->rowCount() <= kAutoStickWarmRows && !origin.isZero(0.0) &&
+      stickingPathApplies(ctx) && allSticking(ctx, best) && stickingPathSolves())
+    members.clear();
   while (!members.empty()) {
     PortfolioMember& cur = members[m];
     member_params.maxIt = std::min(cur.slice, params.maxIt - used);
@@ -780,22 +809,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       const double needed = r.iterations > 0 && best_residual < stage_start
                                 ? iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations)
                                 : std::numeric_limits<double>::infinity();
-      if (probe_sweeps == 0 && friction && !failedToRun(r.status) && stickingPays(ctx, best, needed)) {
-        const Clock::time_point s0 = Clock::now();
-        member_params.maxIt = params.maxIt - used;  // the member context, with the whole deadline
-        member.deadline = ctx.deadline;
-        KernelReport stick;
-        x = best;
-        const bool solved = solveStickingActiveSet(member, x, &stick);
-        stages->emplace_back("active-set", std::chrono::duration<double>(Clock::now() - s0).count());
-        used += stick.iterations;
-        if (solved) {
-          best.swap(x);
-          best_residual = best_error = stick.solver_error;
-          report.status = SolveStatus::kConverged;
-          break;
-        }
-      }
+      if (probe_sweeps == 0 && friction && !sticking_tried && !failedToRun(r.status) &&
+          stickingPays(ctx, best, needed) && stickingPathSolves())
+        break;
       probe_sweeps += r.iterations;
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
@@ -863,7 +879,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       m = next;
     }
   }
-  if (members.empty()) {
+  if (members.empty() && report.status != SolveStatus::kConverged) {  // (converged: a warm start's active set)
     report.status = last_failure;
     report.message = "auto: every member failed; last " + last_message;
   }

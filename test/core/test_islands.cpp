@@ -516,5 +516,23 @@ TEST(StickingNewton, AutoEndsARestingProblemWithIt) {
   EXPECT_LE(recomputedResidual(slide.problem, slid.forces), 1e-10);
 }
 
+// The next step of a scene at rest, warm-started from the last: the warm start sticks
+// everywhere, so auto tries its active set first and ends in one step, before any sweep.
+// With u = 0 on every row the forces scale with d_free: 1.01 λ*.
+TEST(StickingNewton, AWarmStartThatSticksIsTriedFirst) {
+  Resting r = resting(8, 68, 1e-3, 30);
+  SolverParams p = paramsFor(SolverKind::kAuto, 1e-10, 100000, false);
+  p.initial_guess = true;
+  ContactSolver solver(p);
+  ASSERT_TRUE(solver.solve(r.problem).converged);
+  r.problem.d_free *= 1.01;
+  const SolveResult next = solver.solve(r.problem);
+  ASSERT_TRUE(next.converged) << next.message;
+  EXPECT_EQ(next.solver, "auto:active-set");
+  EXPECT_EQ(next.iterations, 1);
+  EXPECT_LE(recomputedResidual(r.problem, next.forces), 1e-10);
+  EXPECT_LE(maxDiff(next.forces, 1.01 * r.star), 1e-8);
+}
+
 }  // namespace
 }  // namespace lcp_contact_solver::core
