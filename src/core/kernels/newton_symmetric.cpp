@@ -309,7 +309,6 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   return std::make_unique<SparseReduced>(std::move(S));
 }
 
-// The active-set iteration of solveSymmetricActiveSet / solveStickingActiveSet.
 // The iteration's vectors, kept per thread: MuJoCo's islands and the microsecond LCPs run
 // this path once per solve, where its allocations had cost a fifth of the solve.
 struct ActiveSetScratch {
@@ -325,6 +324,8 @@ struct ActiveSetScratch {
   return scratch;
 }
 
+// The active-set iteration of solveSymmetricActiveSet (`stick` false) and
+// solveStickingActiveSet (true).
 bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::VectorXd& lambda,
                      KernelReport* report) {
   const Problem& problem = *ctx.problem;
