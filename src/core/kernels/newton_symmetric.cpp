@@ -109,19 +109,15 @@ class ReducedSystem {
   virtual void diagonal(Eigen::VectorXd& d) const = 0;  // of W + r I
 };
 
-// Dense storage of one solve, kept per thread: the islands of a solve (and the solves of a
-// stream) reuse its capacity, so a small island's Newton allocates no matrix.
+// Dense storage of one solve, kept per thread (in ActiveSetScratch): the islands of a solve
+// (and the solves of a stream) reuse its capacity, so a small island's Newton allocates no
+// matrix.
 struct DenseScratch {
   std::vector<double> W, M, b;
   std::vector<int> index;
   std::unique_ptr<Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>> ldlt;  // the semidefinite case
   Eigen::MatrixXd A;
 };
-
-DenseScratch& denseScratch() {
-  thread_local DenseScratch scratch;
-  return scratch;
-}
 
 class DenseReduced : public ReducedSystem {
  public:
@@ -253,13 +249,14 @@ bool denseSystem(const SolveContext& ctx) {
   return blocks == nullptr || n <= kDenseMaxRows || 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
 }
 
-// W + r I as a system, or null when W is not symmetric to kSymmetryTolerance.
-std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
+// W + r I as a system, or null when W is not symmetric to kSymmetryTolerance. A dense one
+// keeps its storage in `dense_scratch`.
+std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx, DenseScratch& dense_scratch) {
   const Problem& p = *ctx.problem;
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
   if (denseSystem(ctx)) {
-    auto system = std::make_unique<DenseReduced>(denseScratch(), n);
+    auto system = std::make_unique<DenseReduced>(dense_scratch, n);
     Eigen::Map<Eigen::MatrixXd> W = system->W();
     if (dense != nullptr) {
       W = *dense;
@@ -309,12 +306,14 @@ std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx) {
   return std::make_unique<SparseReduced>(std::move(S));
 }
 
-// The iteration's vectors, kept per thread: MuJoCo's islands and the microsecond LCPs run
-// this path once per solve, where its allocations had cost a fifth of the solve.
+// The iteration's vectors and its dense storage, kept per thread: MuJoCo's islands and the
+// microsecond LCPs run this path once per solve, where its allocations had cost a fifth of
+// the solve.
 struct ActiveSetScratch {
   std::vector<Role> roles;
   Eigen::VectorXd rho, u, rhs, x, correction, best;
   std::vector<char> active, next;
+  DenseScratch dense;
 };
 
 // One thread-local lookup per solve. Not inlined: in a shared library the compiler otherwise
@@ -335,7 +334,7 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::
   std::vector<Role>& roles = scratch.roles;
   if (problem.bodies || !rowRoles(ctx, stick, &roles)) return false;
   if (stick && !denseSystem(ctx)) return false;  // see stickingPathApplies
-  std::unique_ptr<ReducedSystem> system = makeSystem(ctx);
+  std::unique_ptr<ReducedSystem> system = makeSystem(ctx, scratch.dense);
   if (!system) return false;
   const int n = ctx.offsets.back();
 
