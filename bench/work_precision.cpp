@@ -121,14 +121,17 @@ void runProblem(const wp::Options& opt, const wp::BenchProblem& bp, std::vector<
   auto wanted = [&](const std::string& name) { return opt.solvers.empty() || opt.solvers.count(name) > 0; };
   const bool lcp = lcs_bench::isLcp(bp.problem);
   const auto t0 = Clock::now();
-  for (const wp::OurSolver& s : wp::ourSolvers()) {
+  const std::vector<wp::OurSolver> ours = wp::ourSolvers();
+  std::vector<const wp::OurSolver*> run;
+  for (const wp::OurSolver& s : ours) {
     if (!wanted(s.name) || (lcp ? !s.lcp : !s.friction)) continue;
     if (s.max_rows > 0 && bp.problem.rowCount() > s.max_rows) {
       std::cerr << "  " << s.name << ": not run above " << s.max_rows << " rows\n";
       continue;
     }
-    wp::runOurs(opt, bp, s, csv);
+    run.push_back(&s);
   }
+  wp::runOurs(opt, bp, run, csv);
   for (auto& peer : peers) {
     if (!wanted(peer->name()) || !peer->applies(bp.problem)) continue;
     // Dantzig is O(n^3) without any budget: not run above 1500 rows.

@@ -100,8 +100,10 @@ std::string fmt(double v);
 void writeHeader(std::ostream& os);
 // Every row written so far, in order (the regret table is made from them).
 const std::vector<Row>& writtenRows();
-// One CSV row per tolerance (or the one direct setting) of our solver s on bp.
-void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std::ostream& csv);
+// One CSV row per tolerance (or the one direct setting) of each of our solvers on bp, every
+// setting timed in the same rounds (work_precision_runs.cpp).
+void runOurs(const Options& opt, const BenchProblem& bp, const std::vector<const OurSolver*>& solvers,
+             std::ostream& csv);
 // One CSV row per setting of the peer's sweep on bp.
 void runPeer(const Options& opt, const BenchProblem& bp, Peer& peer, std::ostream& csv);
 

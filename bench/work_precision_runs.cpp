@@ -75,11 +75,19 @@ void writeRow(std::ostream& os, const Row& r) {
   os.flush();
 }
 
-// Runs `once` (which returns its own wall time) adaptively: at least min_repeats runs and
-// min_time in total, a single run when the first is slow; median and minimum.
+// Median, minimum and count of a setting's timed runs.
+void setTimes(std::vector<double> times, Row* row) {
+  std::sort(times.begin(), times.end());
+  const std::size_t n = times.size();
+  row->time_median = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+  row->time_min = times.front();
+  row->repeats = static_cast<int>(n);
+}
+
+// The peers' timing: runs `once` (which returns its own wall time) adaptively: at least
+// min_repeats runs and min_time in total, a single run when the first is slow.
 // A fast first run is a warm-up and is not counted: it pays for the cold caches and page
-// faults of whichever solver happens to be timed first on a freshly built problem (auto, in
-// the study's order): humanoid100 elliptic step 300 at 1e-2 read auto 1.72x nlgs, 1.30x after.
+// faults of whichever solver happens to be timed first on a freshly built problem.
 template <class F>
 void timeRepeated(const Options& opt, F once, Row* row) {
   std::vector<double> times;
@@ -96,11 +104,7 @@ void timeRepeated(const Options& opt, F once, Row* row) {
       if (static_cast<int>(times.size()) >= opt.min_repeats && total >= opt.min_time) break;
     }
   }
-  std::sort(times.begin(), times.end());
-  const std::size_t n = times.size();
-  row->time_median = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
-  row->time_min = times.front();
-  row->repeats = static_cast<int>(n);
+  setTimes(std::move(times), row);
 }
 
 // A setting that ran out of time or iterations: tighter tolerances cannot do better with the
@@ -125,6 +129,75 @@ std::string tolLabel(double t) {
   return buf;
 }
 
+
+// ---- our solvers' settings, timed in rounds ---------------------------------------------------
+//
+// This machine (a VM) runs a microsecond solve at one of two speeds about 1.6x apart, switching
+// every few seconds. Timed one setting after another, a cell of the regret table compared two
+// settings timed seconds apart and read up to 2.4x for the same work (lcp_CPS_5). So every
+// setting of our solvers on one problem is timed in rounds: each round runs a chunk of each
+// (a tenth of the time and repeats the setting needs, after an untimed warm-up solve when the
+// solve is short), so all of them see the same mixture of speeds and keep warm caches.
+
+struct OwnSetting {
+  Row row;
+  lcs::core::SolverParams params;
+  double first = 0.0;  // the first pass's run
+  bool timing = false;  // still being repeated
+  std::vector<double> times;
+  double total = 0.0;
+};
+
+constexpr int kRounds = 10;
+
+double solveOnce(const BenchProblem& bp, const lcs::core::SolverParams& params, lcs::core::SolveResult* result) {
+  const auto t0 = Clock::now();
+  *result = lcs::core::solveProblem(bp.problem, params);
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Status, iterations, residual and path of an answer; the residual recomputed independently.
+void recordAnswer(const BenchProblem& bp, const lcs::core::SolveResult& result, Row* row) {
+  row->status = lcs::core::statusName(result.status);
+  row->converged = result.converged;
+  row->iterations = result.iterations;
+  row->residual = result.residual;
+  row->path = result.solver;
+  // The independent recomputation must agree with the core's own report.
+  const double check = discResidual(bp.problem, result.forces);
+  if (std::abs(check - result.residual) > 1e-9 * std::max(1.0, check))
+    std::cerr << "warning: " << bp.name << " " << row->solver << ": core residual " << result.residual
+              << " vs recomputed " << check << "\n";
+  row->model_residual = result.friction_model == lcs::core::FrictionModel::kCoulombDisc ? result.residual
+                                                                                          : result.solver_error;
+}
+
+bool enoughRepeats(const Options& opt, const OwnSetting& st) {
+  const int n = static_cast<int>(st.times.size());
+  return n >= opt.max_repeats || (n >= opt.min_repeats && st.total >= opt.min_time);
+}
+
+void timeInRounds(const Options& opt, const BenchProblem& bp, std::vector<OwnSetting>* settings) {
+  const double chunk_time = opt.min_time / kRounds;
+  const int chunk_repeats = std::max(1, opt.max_repeats / kRounds);
+  lcs::core::SolveResult scratch;
+  for (bool any = true; any;) {
+    any = false;
+    for (OwnSetting& st : *settings) {
+      if (!st.timing) continue;
+      if (st.first < chunk_time / 4) solveOnce(bp, st.params, &scratch);  // warm caches again
+      double spent = 0.0;
+      for (int k = 0; k < chunk_repeats && spent < chunk_time && !enoughRepeats(opt, st); ++k) {
+        const double t = solveOnce(bp, st.params, &scratch);
+        st.times.push_back(t);
+        st.total += t;
+        spent += t;
+      }
+      st.timing = !enoughRepeats(opt, st);
+      any = any || st.timing;
+    }
+  }
+}
 }  // namespace
 
 // ---- our solvers ----------------------------------------------------------------------------
@@ -162,57 +235,53 @@ void writeHeader(std::ostream& os) {
 
 const std::vector<Row>& writtenRows() { return g_rows; }
 
-void runOurs(const Options& opt, const BenchProblem& bp, const OurSolver& s, std::ostream& csv) {
+void runOurs(const Options& opt, const BenchProblem& bp, const std::vector<const OurSolver*>& solvers,
+             std::ostream& csv) {
   Row base;
   base.family = bp.family;
   base.problem = bp.name;
   base.contacts = static_cast<int>(bp.problem.contacts.size());
   base.rows = bp.problem.rowCount();
-  base.solver = s.name;
-  std::vector<double> tols = s.direct ? std::vector<double>{kNaN} : opt.tolerances;
-  bool skip = false;
-  for (double tol : tols) {
-    Row row = base;
-    row.setting = s.direct ? "direct" : tolLabel(tol);
-    row.tolerance = tol;
-    if (skip) {
-      writeRow(csv, skippedRow(row, "skipped"));
-      continue;
+  // First pass, solver by solver: the answer of every setting (and which to skip).
+  std::vector<OwnSetting> settings;
+  for (const OurSolver* s : solvers) {
+    base.solver = s->name;
+    const std::vector<double> tols = s->direct ? std::vector<double>{kNaN} : opt.tolerances;
+    bool skip = false;
+    for (double tol : tols) {
+      OwnSetting st;
+      st.row = base;
+      st.row.setting = s->direct ? "direct" : tolLabel(tol);
+      st.row.tolerance = tol;
+      if (skip) {
+        st.row = skippedRow(st.row, "skipped");
+        settings.push_back(std::move(st));
+        continue;
+      }
+      st.params.solver = s->kind;
+      st.params.friction_model = s->model;
+      st.params.sor = s->sor;
+      st.params.tolerance = s->direct ? 1e-12 : tol;
+      st.params.maxIt = s->direct ? 1000000 : 10000000;
+      st.params.time_budget = opt.budget;
+      st.params.initial_guess = false;
+      lcs::core::SolveResult result;
+      st.first = solveOnce(bp, st.params, &result);
+      recordAnswer(bp, result, &st.row);
+      if (st.first >= opt.single_above)
+        st.times.push_back(st.first);  // slow: this one run is the measurement
+      else
+        st.timing = true;  // fast: the first run was a warm-up (cold caches, page faults)
+      // auto changes its kernel with the tolerance, so a failure at one setting says nothing
+      // about the next.
+      if (failedSetting(st.row) && s->kind != lcs::core::SolverKind::kAuto) skip = true;
+      settings.push_back(std::move(st));
     }
-    lcs::core::SolverParams params;
-    params.solver = s.kind;
-    params.friction_model = s.model;
-    params.sor = s.sor;
-    params.tolerance = s.direct ? 1e-12 : tol;
-    params.maxIt = s.direct ? 1000000 : 10000000;
-    params.time_budget = opt.budget;
-    params.initial_guess = false;
-    lcs::core::SolveResult result;
-    timeRepeated(
-        opt,
-        [&] {
-          const auto t0 = Clock::now();
-          result = lcs::core::solveProblem(bp.problem, params);
-          return std::chrono::duration<double>(Clock::now() - t0).count();
-        },
-        &row);
-    row.status = lcs::core::statusName(result.status);
-    row.converged = result.converged;
-    row.iterations = result.iterations;
-    row.residual = result.residual;
-    row.path = result.solver;
-    // The independent recomputation must agree with the core's own report.
-    const double check = discResidual(bp.problem, result.forces);
-    if (std::abs(check - result.residual) > 1e-9 * std::max(1.0, check))
-      std::cerr << "warning: " << bp.name << " " << s.name << ": core residual " << result.residual
-                << " vs recomputed " << check << "\n";
-    row.model_residual = result.friction_model == lcs::core::FrictionModel::kCoulombDisc
-                             ? result.residual
-                             : result.solver_error;
-    writeRow(csv, row);
-    // auto changes its kernel with the tolerance, so a failure at one setting says nothing
-    // about the next.
-    if (failedSetting(row) && s.kind != lcs::core::SolverKind::kAuto) skip = true;
+  }
+  timeInRounds(opt, bp, &settings);
+  for (OwnSetting& st : settings) {
+    if (!st.times.empty()) setTimes(st.times, &st.row);
+    writeRow(csv, st.row);
   }
 }
 
