@@ -395,6 +395,20 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
   }
   KernelReport out = worst->report;
   out.history.clear();
+  // auto's path: the island that took longest, which the solve's time is mostly made of (the
+  // one with the most iterations had read "auto:nlgs" on Capsules-i100-1090 at 1e-6, where a
+  // 177-row island's nlgs->apgd->newton took 1.6 of the 3.4 ms).
+  const Island* slowest = worst;
+  double slowest_seconds = -1.0;
+  for (const Island& isl : islands_) {
+    double seconds = 0.0;
+    for (const auto& stage : isl.report.stages) seconds += stage.second;
+    if (!isl.report.stages.empty() && seconds > slowest_seconds) {
+      slowest = &isl;
+      slowest_seconds = seconds;
+    }
+  }
+  if (slowest != worst) out.stages = slowest->report.stages;
   out.message = globalContactNames(out.message, worst->contacts);
   bool friction_model_set = false;
   for (const Island& isl : islands_) {

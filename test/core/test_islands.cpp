@@ -208,6 +208,27 @@ TEST(Islands, AutoAcceptsAZeroStartThatMeetsTheToleranceAsAWhole) {
   }
 }
 
+// auto on islands reports one island's path (the one that took longest): "auto:" and its
+// stages' names, each stage's time within the solve's own.
+TEST(Islands, AutoReportsThePathOfOneIslandWithItsTimes) {
+  const Generated g = generate(6, 6, Kinds::kFrictional, 11);
+  ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
+  for (double tol : {1e-4, 1e-8}) {
+    const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, 100000, true));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
+    ASSERT_FALSE(r.stages.empty()) << r.solver;
+    std::string path = "auto:";
+    double total = 0.0;
+    for (std::size_t i = 0; i < r.stages.size(); ++i) {
+      path += (i ? "->" : "") + r.stages[i].first;
+      total += r.stages[i].second;
+    }
+    EXPECT_EQ(r.solver, path);
+    EXPECT_LE(total, r.solve_time + 1e-6);
+  }
+}
+
 TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
   for (bool sparse : {false, true}) {
     Generated g = generate(40, 4, Kinds::kMixed, 9);  // > 200 rows: the pool runs

@@ -56,9 +56,10 @@ struct SolveResult {
   FrictionModel friction_model = FrictionModel::kCoulombDisc;
   double solve_time = 0.0;  // wall time of the solve, seconds
   // Name of the solver that ran; for auto the path of the portfolio, "auto:" and the
-  // members in the order they ran joined by "->" (e.g. "auto:newton->prox").
+  // members in the order they ran joined by "->" (e.g. "auto:newton->prox"); on a problem
+  // solved by islands, the path of the island that took longest.
   std::string solver;
-  // auto: (member, seconds) per stage of the path, in order; empty for a fixed solver.
+  // auto: (member, seconds) per stage of that path, in order; empty for a fixed solver.
   std::vector<std::pair<std::string, double>> stages;
   // The unbuilt Gauss-Seidel ran on the problem's body form (build_lcp = false): W was
   // never assembled. False for every built solve.
