@@ -129,7 +129,6 @@ std::string tolLabel(double t) {
   return buf;
 }
 
-
 // ---- our solvers' settings, timed in rounds ---------------------------------------------------
 //
 // This machine (a VM) runs a microsecond solve at one of two speeds about 1.6x apart, switching
@@ -198,6 +197,7 @@ void timeInRounds(const Options& opt, const BenchProblem& bp, std::vector<OwnSet
     }
   }
 }
+
 }  // namespace
 
 // ---- our solvers ----------------------------------------------------------------------------
