@@ -186,7 +186,8 @@ void timeInRounds(const Options& opt, const BenchProblem& bp, std::vector<OwnSet
       if (!st.timing) continue;
       if (st.first < chunk_time / 4) solveOnce(bp, st.params, &scratch);  // warm caches again
       double spent = 0.0;
-      for (int k = 0; k < chunk_repeats && spent < chunk_time && !enoughRepeats(opt, st); ++k) {
+      // At least one solve per chunk: --quick asks for no minimum time at all.
+      for (int k = 0; k < chunk_repeats && (k == 0 || spent < chunk_time) && !enoughRepeats(opt, st); ++k) {
         const double t = solveOnce(bp, st.params, &scratch);
         st.times.push_back(t);
         st.total += t;
