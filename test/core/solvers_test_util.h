@@ -1,4 +1,4 @@
-// Problems and checks shared by the test_solvers*.cpp files.
+// Problems and checks shared by the core tests (test_solvers*.cpp, test_portfolio.cpp, test_islands.cpp).
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"
@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 namespace lcp_contact_solver::core {
 namespace solvers_test {
@@ -98,6 +99,23 @@ inline void expectFinite(const SolveResult& r) {
   EXPECT_TRUE(r.d.allFinite());
   EXPECT_TRUE(std::isfinite(r.residual));
   EXPECT_TRUE(std::isfinite(r.solver_error));
+}
+
+// The reported path and stages agree: "auto:" + the stage names joined by "->".
+inline void expectPath(const SolveResult& r) {
+  ASSERT_FALSE(r.stages.empty()) << r.solver;  // "auto" alone only when the start was an answer
+  std::string path = "auto:";
+  double total = 0.0;
+  for (std::size_t i = 0; i < r.stages.size(); ++i) {
+    path += (i ? "->" : "") + r.stages[i].first;
+    EXPECT_GE(r.stages[i].second, 0.0);
+    total += r.stages[i].second;
+    if (i > 0) {
+      EXPECT_NE(r.stages[i].first, r.stages[i - 1].first) << "consecutive slices are one stage";
+    }
+  }
+  EXPECT_EQ(r.solver, path);
+  EXPECT_LE(total, r.solve_time + 1e-6);
 }
 
 const SolverKind kDiscSolvers[] = {SolverKind::kApgd, SolverKind::kNewton};

@@ -6,6 +6,7 @@
 // forces bit for bit whatever the thread count; the symmetric Newton path returns forces
 // whose residual, recomputed here from W, d_free and the forces, meets the tolerance.
 #include "hard_case_util.h"
+#include "solvers_test_util.h"
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
@@ -217,15 +218,7 @@ TEST(Islands, AutoReportsThePathOfOneIslandWithItsTimes) {
     const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, 100000, true));
     ASSERT_TRUE(r.converged) << r.message;
     EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
-    ASSERT_FALSE(r.stages.empty()) << r.solver;
-    std::string path = "auto:";
-    double total = 0.0;
-    for (std::size_t i = 0; i < r.stages.size(); ++i) {
-      path += (i ? "->" : "") + r.stages[i].first;
-      total += r.stages[i].second;
-    }
-    EXPECT_EQ(r.solver, path);
-    EXPECT_LE(total, r.solve_time + 1e-6);
+    solvers_test::expectPath(r);
   }
 }
 

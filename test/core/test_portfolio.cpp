@@ -97,23 +97,6 @@ void expectPlanStartsWith(const SolveResult& r, const std::string& first) {
   EXPECT_EQ(afterProbe(r).rfind(first, 0), 0u) << r.solver;
 }
 
-// The reported path and stages agree: "auto:" + the stage names joined by "->".
-void expectPath(const SolveResult& r) {
-  ASSERT_FALSE(r.stages.empty()) << r.solver;  // "auto" alone only when the start was an answer
-  std::string path = "auto:";
-  double total = 0.0;
-  for (std::size_t i = 0; i < r.stages.size(); ++i) {
-    path += (i ? "->" : "") + r.stages[i].first;
-    EXPECT_GE(r.stages[i].second, 0.0);
-    total += r.stages[i].second;
-    if (i > 0) {
-      EXPECT_NE(r.stages[i].first, r.stages[i - 1].first) << "consecutive slices are one stage";
-    }
-  }
-  EXPECT_EQ(r.solver, path);
-  EXPECT_LE(total, r.solve_time + 1e-6);
-}
-
 TEST(Portfolio, RankDeficientStackWhereNewtonStallsStillConverges) {
   const Problem p = boxStack(2, 8, 100.0, 0.5, 0.8);
   const double tol = 1e-8;
@@ -124,7 +107,7 @@ TEST(Portfolio, RankDeficientStackWhereNewtonStallsStillConverges) {
   EXPECT_LE(recomputedResidual(p, r), tol);
   EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
   EXPECT_LE(r.iterations, 20000);
-  expectPath(r);
+  solvers_test::expectPath(r);
   EXPECT_EQ(afterScout(r).rfind("auto:newton->", 0), 0u) << r.solver;  // predicted first, then handed over
   // The proximal kernel on its own reaches the tolerance too.
   const SolveResult prox = solveProblem(p, params(SolverKind::kProx, tol, 20000));
@@ -146,7 +129,7 @@ TEST(Portfolio, StacksWhereOnlyOneMemberProgresses) {
     ASSERT_EQ(r.status, SolveStatus::kConverged) << boxes << " " << r.solver << ": " << r.message;
     EXPECT_LE(recomputedResidual(p, r), tol) << boxes;
     EXPECT_LE(r.iterations, 20000);
-    expectPath(r);
+    solvers_test::expectPath(r);
     EXPECT_NE(r.solver.find("apgd"), std::string::npos) << r.solver;
   }
 }
@@ -188,7 +171,7 @@ TEST(Portfolio, GaussSeidelCannotStartAndAnotherMemberCarriesIt) {
     const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 1000));
     ASSERT_EQ(r.status, SolveStatus::kConverged) << tol << " " << r.solver << ": " << r.message;
     EXPECT_LE(recomputedResidual(p, r), tol);
-    expectPath(r);
+    solvers_test::expectPath(r);
     // W is diagonally dominant where it is not zero: nlgs is predicted, fails, hands over.
     EXPECT_EQ(r.solver.rfind("auto:nlgs->", 0), 0u) << r.solver;
     EXPECT_EQ(r.forces[0], 0.0);  // the separating contact carries nothing
@@ -203,7 +186,7 @@ TEST(Portfolio, MaxItBoundsTheWholePath) {
   EXPECT_EQ(r.status, SolveStatus::kMaxIterations) << r.solver << ": " << r.message;
   EXPECT_LE(r.iterations, 400);
   EXPECT_GE(r.stages.size(), 2u) << r.solver;  // newton's share ran out and another member took over
-  expectPath(r);
+  solvers_test::expectPath(r);
   EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
 }
 
@@ -216,7 +199,7 @@ TEST(Portfolio, TimeBudgetBoundsTheWholePath) {
   const SolveResult r = solveProblem(p, q);
   EXPECT_EQ(r.status, SolveStatus::kTimeBudget) << r.solver << ": " << r.message;
   EXPECT_TRUE(r.forces.allFinite());
-  expectPath(r);
+  solvers_test::expectPath(r);
   EXPECT_NEAR(recomputedResidual(p, r), r.residual, 1e-12);
 }
 
@@ -468,7 +451,7 @@ TEST(Portfolio, LcpWithoutDiagonalLeavesPgsOut) {
   const SolveResult r = solveProblem(game, params(SolverKind::kAuto, 1e-8, 1000));
   ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
   EXPECT_EQ(r.solver.find("pgs"), std::string::npos) << r.solver;
-  expectPath(r);
+  solvers_test::expectPath(r);
   EXPECT_LE(recomputedResidual(game, r), 1e-8);
 }
 
