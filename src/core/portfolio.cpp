@@ -94,8 +94,9 @@ constexpr int kAutoScoutIterations = 100;
 constexpr int kAutoScoutRows = 30;
 // Gauss-Seidel's over-relaxation ω, chosen online where the user left sor at 1: a plan's
 // Gauss-Seidel member first sweeps kAutoOmegaTrial times plainly, measuring its rate ρ per
-// sweep, then as many at Young's ω = 2 / (1 + √(1 − ρ)) (optimal for a linear, consistently
-// ordered W, whose plain Gauss-Seidel rate is ρ), and keeps ω only if those sweeps did better.
+// sweep, then, if at that rate it would need more sweeps than that again, as many at Young's
+// ω = 2 / (1 + √(1 − ρ)) (optimal for a linear, consistently ordered W whose plain
+// Gauss-Seidel rate is ρ), and keeps ω only if those sweeps did better.
 // Frictional and unilateral rows are neither linear nor stationary: ω is capped at 1.5 (a
 // window where plain sweeps stalled while the active set moved asked for 1.9, which then
 // tripled a MuJoCo humanoid island's sweeps), and the trial's later window is judged against
@@ -799,9 +800,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (saved_slice > 0) {  // a trial window: its rate per sweep
       const bool moved = r.iterations > 0 && residual < start_residual && !failedToRun(r.status);
       const double rate = moved ? std::pow(residual / start_residual, 1.0 / r.iterations) : 1.0;
-      if (omega_state == 0) {
+      if (omega_state == 0) {  // the trial only where the plain sweeps would outlast it
         plain_rate = rate;
-        omega_state = moved ? 1 : 2;
+        omega_state = moved && iterationsToReach(params.tolerance, start_residual, residual, r.iterations) >
+                                   kAutoOmegaTrial ? 1 : 2;
       } else {
         if (!(rate < plain_rate)) gs_omega = 1.0;
         omega_state = 2;

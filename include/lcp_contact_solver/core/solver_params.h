@@ -93,7 +93,8 @@ struct SolverParams {
   SolverKind solver = SolverKind::kAuto;
   // Over-relaxation ω of the Gauss-Seidel solvers (pgs, nlgs), in (0, 2): each contact
   // moves λ_c <- λ_c + ω (λ_c^local - λ_c) and is projected back onto its feasible set.
-  // 1 is plain Gauss-Seidel (bit-identical to no relaxation).
+  // 1 is plain Gauss-Seidel (bit-identical to no relaxation); left at 1, `auto` tries a
+  // measured ω for its Gauss-Seidel member and keeps it only if it sweeps faster.
   double sor = 1.0;
   // Friction law for pgs and lemke (see FrictionModel).
   FrictionModel friction_model = FrictionModel::kCoulombDisc;
