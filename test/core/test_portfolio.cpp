@@ -311,7 +311,8 @@ TEST(Portfolio, GaussSeidelFirstAtModerateToleranceUnlessContactsAreMultiPoint) 
 }
 
 // Gauss-Seidel's over-relaxation is chosen online: after the probe, ten plain sweeps measure
-// their rate, ten more run at Young's ω for that rate, and ω stays only if they did better.
+// their rate and, where at that rate more than ten would still be needed, ten more run at
+// Young's ω for that rate; ω stays only if they did better.
 // Without it the probe's and the member's sweeps are plain nlgs's own run, sweep for sweep.
 // On 20 strongly coupled frictional contacts ω stays: auto sweeps fewer times than plain nlgs,
 // and nlgs given a like ω (its sor parameter) confirms that over-relaxation is what saved
