@@ -30,6 +30,26 @@ bool SolveContext::hasFriction() const {
   return false;
 }
 
+double SolveContext::normalDiagonal(int i) const {
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem->W)) return (*dense)(offsets[i], offsets[i]);
+  const auto* sparse = std::get_if<BlockSparseMatrix>(&problem->W);
+  if (!sparse || i >= sparse->blockCount()) return 0.0;
+  const double* block = sparse->diagonalValues(i);
+  return block ? block[0] : 0.0;
+}
+
+bool SolveContext::positiveDiagonal() const {
+  const int nc = static_cast<int>(problem->contacts.size());
+  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem->W)) {  // the storage resolved once
+    for (int i = 0; i < nc; ++i)
+      if (!ignored[i] && !((*dense)(offsets[i], offsets[i]) + regularization > 0.0)) return false;
+    return true;
+  }
+  for (int i = 0; i < nc; ++i)
+    if (!ignored[i] && !(normalDiagonal(i) + regularization > 0.0)) return false;
+  return true;
+}
+
 namespace {
 
 // Lemke ends when z0 leaves the basis: exact in exact arithmetic, but on an ill-conditioned

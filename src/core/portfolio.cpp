@@ -201,31 +201,6 @@ int activeContacts(const SolveContext& ctx) {
   return n;
 }
 
-// W_nn of contact i: its first diagonal entry (a block-sparse W's stored diagonal block; 0
-// when none is stored). The body form has no W: 0.
-double normalDiagonal(const SolveContext& ctx, int i) {
-  const Problem& p = *ctx.problem;
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) return (*dense)(ctx.offsets[i], ctx.offsets[i]);
-  const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W);
-  if (!sparse || i >= sparse->blockCount()) return 0.0;
-  const double* block = sparse->diagonalValues(i);
-  return block ? block[0] : 0.0;
-}
-
-// Gauss-Seidel can start: every active contact has a positive normal diagonal.
-bool positiveDiagonal(const SolveContext& ctx) {
-  const Problem& p = *ctx.problem;
-  const int nc = static_cast<int>(p.contacts.size());
-  if (const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W)) {  // the storage resolved once
-    for (int i = 0; i < nc; ++i)
-      if (!ctx.ignored[i] && !((*dense)(ctx.offsets[i], ctx.offsets[i]) + ctx.regularization > 0.0)) return false;
-    return true;
-  }
-  for (int i = 0; i < nc; ++i)
-    if (!ctx.ignored[i] && !(normalDiagonal(ctx, i) + ctx.regularization > 0.0)) return false;
-  return true;
-}
-
 // The set of contacts one contact is coupled to, itself included, kept as a sum of a hash of
 // each member (order-free) and its size: two contacts between the same bodies have the same set.
 struct CouplingSet {
@@ -300,7 +275,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   double* off_sum = diag + nc;
   double* lower_sum = off_sum + nc;
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  for (int i = 0; i < nc; ++i) diag[i] = normalDiagonal(ctx, i);
+  for (int i = 0; i < nc; ++i) diag[i] = ctx.normalDiagonal(i);
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (j < i) lower_sum[i] += std::abs(w);
@@ -426,7 +401,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
   if (!friction && f.rows > kAutoLemkeRows) return f;  // the plan reads only the size there
   if (!friction && f.sparse) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
     f.coupling = sparseCoupling(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant);
-    f.positive_diagonal = f.coupling < kAutoStrongDominant && positiveDiagonal(ctx);  // else unread
+    f.positive_diagonal = f.coupling < kAutoStrongDominant && ctx.positiveDiagonal();  // else unread
     f.symmetric = true;  // presumed (below)
     return f;
   }
@@ -434,7 +409,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.symmetric = known_symmetric >= 0 ? known_symmetric == 1 : isSymmetric(ctx.problem->W, 1e-12);
     if (f.symmetric) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
       f.coupling = denseSymmetricCoupling(ctx, std::get<Eigen::MatrixXd>(ctx.problem->W), kAutoStrongDominant);
-      f.positive_diagonal = positiveDiagonal(ctx);
+      f.positive_diagonal = ctx.positiveDiagonal();
       return f;
     }
   }
@@ -464,7 +439,7 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
   if (friction && pyramidModel(p)) return {K::kPgs, K::kLemke};
   // One contact (most islands of a scene at rest): Gauss-Seidel's local step is that
   // contact's own exact solve, so no feature is worth measuring.
-  if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && positiveDiagonal(ctx))
+  if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && ctx.positiveDiagonal())
     return friction ? Plan{K::kNlgs, K::kNewton, K::kApgd, K::kProx}
                     : Plan{K::kPgs, K::kLemke, K::kNewton, K::kApgd};
   if (ctx.problem->bodies)  // unbuilt first: no W
@@ -560,7 +535,7 @@ SolverKind probeKind(const SolveContext& ctx, bool friction) {
   // A block-sparse LCP is presumed symmetric (below): newton's active-set path, a few
   // Cholesky steps, is what the probe would delay (MuJoCo's pyramidal steps: +10..40 %).
   if (!friction && std::holds_alternative<BlockSparseMatrix>(ctx.problem->W)) return SolverKind::kAuto;
-  if (!ctx.problem->bodies && !positiveDiagonal(ctx)) return SolverKind::kAuto;
+  if (!ctx.problem->bodies && !ctx.positiveDiagonal()) return SolverKind::kAuto;
   return friction ? SolverKind::kNlgs : SolverKind::kPgs;
 }
 

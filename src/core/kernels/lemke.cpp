@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace lcp_contact_solver::core {
@@ -52,6 +54,7 @@ struct LcpData {
 LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
   const Problem& problem = *ctx.problem;
   LcpData lcp;
+  lcp.variables.reserve(static_cast<std::size_t>(problem.rowCount()));
   for (std::size_t c = 0; c < problem.contacts.size(); ++c) {
     if (!ctx.ignored.empty() && ctx.ignored[c]) continue;
     const Contact& contact = problem.contacts[c];
@@ -70,7 +73,11 @@ LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
     }
   }
   const int n = static_cast<int>(lcp.variables.size());
-  const Eigen::MatrixXd W = toDense(problem.W);
+  // A dense W is read in place (no copy on a microsecond solve).
+  Eigen::MatrixXd converted;
+  const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W);
+  if (dense == nullptr) converted = toDense(problem.W);
+  const Eigen::MatrixXd& W = dense != nullptr ? *dense : converted;
   lcp.M.resize(n, n);
   lcp.q.resize(n);
   for (int j = 0; j < n; ++j) {
@@ -329,8 +336,13 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   KernelReport report;
   const Problem& problem = *ctx.problem;
   const SolverParams& params = *ctx.params;
-  const std::vector<int> offsets = ctx.offsets.empty() ? problem.rowOffsets() : ctx.offsets;
-  const std::vector<double> mu = ctx.mu.empty() ? effectiveMu(problem, params.mu) : ctx.mu;
+  // The context's offsets and μ, computed here only when a caller left them out.
+  std::vector<int> own_offsets;
+  std::vector<double> own_mu;
+  if (ctx.offsets.empty()) own_offsets = problem.rowOffsets();
+  if (ctx.mu.empty()) own_mu = effectiveMu(problem, params.mu);
+  const std::vector<int>& offsets = ctx.offsets.empty() ? own_offsets : ctx.offsets;
+  const std::vector<double>& mu = ctx.mu.empty() ? own_mu : ctx.mu;
   const int row_count = problem.rowCount();
 
   const int frictional = firstFrictionalContact(ctx, mu);
@@ -424,12 +436,15 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       }
       row = tableau.leavingRow(column, entering_scale);
       if (row < 0) {
-        std::ostringstream out;
-        out << "Lemke ended on a secondary ray after " << pivots << " pivots (z0 = " << tableau.z0Value()
-            << "): no solution found; for positive semidefinite M (e.g. "
-            << "frictionless contacts with W + r I) this means the constraints are infeasible";
+        // snprintf, not a stream: auto's plans on non-monotone LCPs end here routinely.
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "Lemke ended on a secondary ray after %d pivots (z0 = %g): no solution found; for "
+                      "positive semidefinite M (e.g. frictionless contacts with W + r I) this means the "
+                      "constraints are infeasible",
+                      pivots, tableau.z0Value());
         status = SolveStatus::kRayTermination;
-        message = out.str();
+        message = line;
         break;
       }
     }

@@ -46,6 +46,7 @@
 // When to use it: when high accuracy is wanted (1e-8..1e-12), on small and medium
 // problems (up to a few thousand rows), including ill-conditioned or rank-deficient W
 // where Gauss-Seidel stalls; each iteration is far more expensive than a sweep.
+#include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 #include "local_contact_laws.h"
@@ -117,7 +118,7 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
   // Fallback weight for a non-positive diagonal: the largest diagonal of W.
   double fallback = 0.0;
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const Eigen::MatrixXd D = diagonalBlock(problem.W, ctx.offsets[i], problem.contacts[i].rows);
+    const ContactBlock D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));
     fallback = std::max(fallback, D.diagonal().maxCoeff() + ctx.regularization);
   }
   const double rho_fallback = fallback > 0.0 ? 1.0 / fallback : 1.0;
@@ -129,7 +130,7 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
     nc.rows = c.rows;
     nc.mu = ctx.mu[i];
     if (ctx.ignored[i]) continue;  // kIdentity: Φ = λ keeps the force at zero
-    Eigen::MatrixXd D = diagonalBlock(problem.W, nc.offset, c.rows);
+    ContactBlock D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));
     D.diagonal().array() += ctx.regularization;
     switch (c.type) {
       case ContactType::kBilateral:
@@ -150,6 +151,18 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
     }
   }
   return contacts;
+}
+
+// nlgs would stop at once with zero_diagonal: an active contact other than a bilateral one
+// has W_nn + r <= 0 (its local step divides by it). Known here without forming nlgs' blocks.
+bool gaussSeidelCannotStart(const SolveContext& ctx) {
+  const Problem& problem = *ctx.problem;
+  if (problem.bodies) return false;  // W not stored: nlgs finds out itself
+  for (std::size_t i = 0; i < problem.contacts.size(); ++i)
+    if (!ctx.ignored[i] && problem.contacts[i].type != ContactType::kBilateral &&
+        !(ctx.normalDiagonal(static_cast<int>(i)) + ctx.regularization > 0.0))
+      return true;
+  return false;
 }
 
 // Φ of one contact from λ_c, u_c; with `blocks`, also its Jacobian blocks.
@@ -388,7 +401,11 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   GaussSeidelMemo own_memo;  // the warm-up's blocks serve every burst
   if (warm_ctx.gs_memo == nullptr) warm_ctx.gs_memo = &own_memo;
   const Eigen::VectorXd start = lambda;
-  const KernelReport warm = runNonlinearGaussSeidel(warm_ctx, lambda);
+  KernelReport warm;
+  if (gaussSeidelCannotStart(ctx))
+    warm.status = SolveStatus::kZeroDiagonal;  // as nlgs would say, without its set-up
+  else
+    warm = runNonlinearGaussSeidel(warm_ctx, lambda);
   int warm_sweeps = 0;
   if (warm.status == SolveStatus::kZeroDiagonal || !lambda.allFinite()) {
     lambda = start;  // nlgs cannot run here; Newton can (ε I regularizes)

@@ -63,6 +63,11 @@ struct SolveContext {
   // d = (W + r I) λ + d_free
   void computeD(const Eigen::VectorXd& lambda, Eigen::VectorXd& d) const;
   bool hasFriction() const;  // some active frictional contact with μ > 0
+  // W_nn of contact i: its first diagonal entry (a block-sparse W's stored diagonal block; 0
+  // when none is stored). The body form has no W: 0.
+  double normalDiagonal(int i) const;
+  // Gauss-Seidel can start: every active contact has a positive W_nn + r.
+  bool positiveDiagonal() const;
 };
 
 struct KernelReport {
