@@ -86,7 +86,7 @@ constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
 // well conditioned on the active set apgd ends in tens of iterations (box pyramids: 30-60)
 // against newton's 8-20 slow steps; where it is not (BoxesStack1, OneObject: thousands) the
 // scout's iterate is dropped and newton starts where it would have. It runs kAutoScoutFirst
-// iterations, then on while twice what its rate says reaches the tolerance within
+// iterations, then on while the rate of its last slice reaches the tolerance within
 // kAutoScoutIterations in all. Its first 20 products with W cost less than two dense
 // factorizations (2 n³/3 flops) from 30 rows up: below that the scout could cost more than
 // newton's whole solve.
@@ -660,6 +660,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   struct {
     Eigen::VectorXd x;     // its own last iterate
     int iterations = 0;
+    double last_residual = 0.0;  // at the end of its last slice
     Eigen::VectorXd best;  // the best iterate before it, and its measures
     double residual = 0.0, error = 0.0;
     FrictionModel model = FrictionModel::kCoulombDisc;
@@ -804,16 +805,17 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (saved_slice > 0 && !failedToRun(r.status)) continue;  // a trial window is no slice: no stall test
     if (cur.scout) {
-      // Go on while its rate so far (from the start), with a margin of 2 as for the probe,
-      // reaches the tolerance within its allowance: apgd's rate only slows as it goes (the
-      // residual of an accelerated method is not even monotone), and a scout that ran out of
-      // its allowance was pure loss. Otherwise newton starts from what it would have started
-      // from.
+      // Go on while the rate of its last slice (the first: from the start) reaches the
+      // tolerance within its allowance, as the probe's stages do: apgd's rate slows as it
+      // goes, and a scout that runs out of its allowance is pure loss. Otherwise newton
+      // starts from what it would have started from.
+      const double slice_start = scout.iterations == 0 ? probe_start : scout.last_residual;
       scout.iterations += r.iterations;
-      if (r.iterations > 0 && residual < probe_start && !failedToRun(r.status) &&
+      scout.last_residual = residual;
+      if (r.iterations > 0 && residual < slice_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
-        const double needed = iterationsToReach(params.tolerance, probe_start, residual, scout.iterations);
-        if (scout.iterations + 2.0 * needed <= kAutoScoutIterations) {
+        const double needed = iterationsToReach(params.tolerance, slice_start, residual, r.iterations);
+        if (scout.iterations + needed <= kAutoScoutIterations) {
           cur.slice = static_cast<int>(std::ceil(needed)) + 1;
           continue;
         }
