@@ -29,10 +29,11 @@
 //
 // Hybrid. Semismooth Newton converges fast once the contact states (open, stick, slip)
 // are right but can crawl while they change. So it starts from 20 nlgs sweeps (or
-// residual 1e-3; none where nlgs cannot start, a non-positive W_nn), and whenever 10 Newton steps fail to halve the residual, up to 100
-// nlgs sweeps from the best iterate (or a tenfold decrease) move the states on before
-// Newton resumes; three full steps in a row that barely move the residual get ten such
-// sweeps at once, kept only if they reach the tenfold decrease. A warm-started solve that
+// residual 1e-3; none where nlgs cannot start, a non-positive W_nn), and whenever 10
+// Newton steps fail to halve the residual, up to 100 nlgs sweeps from the best iterate (or
+// a tenfold decrease) move the states on before Newton resumes; three full steps in a row
+// that barely move the residual get ten such sweeps at once, kept only if they reach the
+// tenfold decrease. A warm-started solve that
 // stalls a second time restarts once from λ = 0; one whose best residual has not halved
 // over five such rounds stops with numerical_failure (a floor of its own, not worth the
 // rest of the budget). Iterations count Newton steps plus nlgs sweeps.
