@@ -33,10 +33,10 @@
 // Newton steps fail to halve the residual, up to 100 nlgs sweeps from the best iterate (or
 // a tenfold decrease) move the states on before Newton resumes; three full steps in a row
 // that barely move the residual get ten such sweeps at once, kept only if they reach the
-// tenfold decrease. A warm-started solve that
-// stalls a second time restarts once from λ = 0; one whose best residual has not halved
-// over five such rounds stops with numerical_failure (a floor of its own, not worth the
-// rest of the budget). Iterations count Newton steps plus nlgs sweeps.
+// tenfold decrease. A warm-started solve that stalls a second time restarts once from
+// λ = 0; one whose best residual has not halved over five such rounds stops with
+// numerical_failure (a floor of its own, not worth the rest of the budget). Iterations
+// count Newton steps plus nlgs sweeps.
 //
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
