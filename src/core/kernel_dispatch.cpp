@@ -38,15 +38,18 @@ double SolveContext::normalDiagonal(int i) const {
   return block ? block[0] : 0.0;
 }
 
-bool SolveContext::positiveDiagonal() const {
+bool SolveContext::positiveDiagonal(bool bilateral) const {
   const int nc = static_cast<int>(problem->contacts.size());
+  auto checked = [&](int i) {
+    return !ignored[i] && (bilateral || problem->contacts[i].type != ContactType::kBilateral);
+  };
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem->W)) {  // the storage resolved once
     for (int i = 0; i < nc; ++i)
-      if (!ignored[i] && !((*dense)(offsets[i], offsets[i]) + regularization > 0.0)) return false;
+      if (checked(i) && !((*dense)(offsets[i], offsets[i]) + regularization > 0.0)) return false;
     return true;
   }
   for (int i = 0; i < nc; ++i)
-    if (!ignored[i] && !(normalDiagonal(i) + regularization > 0.0)) return false;
+    if (checked(i) && !(normalDiagonal(i) + regularization > 0.0)) return false;
   return true;
 }
 

@@ -154,18 +154,6 @@ std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
   return contacts;
 }
 
-// nlgs would stop at once with zero_diagonal: an active contact other than a bilateral one
-// has W_nn + r <= 0 (its local step divides by it). Known here without forming nlgs' blocks.
-bool gaussSeidelCannotStart(const SolveContext& ctx) {
-  const Problem& problem = *ctx.problem;
-  if (problem.bodies) return false;  // W not stored: nlgs finds out itself
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i)
-    if (!ctx.ignored[i] && problem.contacts[i].type != ContactType::kBilateral &&
-        !(ctx.normalDiagonal(static_cast<int>(i)) + ctx.regularization > 0.0))
-      return true;
-  return false;
-}
-
 // Φ of one contact from λ_c, u_c; with `blocks`, also its Jacobian blocks.
 void contactFunction(const NewtonContact& nc, const double* l, const double* u, double* phi,
                      JacobianBlocks* blocks) {
@@ -403,7 +391,9 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   if (warm_ctx.gs_memo == nullptr) warm_ctx.gs_memo = &own_memo;
   const Eigen::VectorXd start = lambda;
   KernelReport warm;
-  if (gaussSeidelCannotStart(ctx))
+  // nlgs would stop at once with zero_diagonal where a non-bilateral contact has W_nn + r <= 0:
+  // known here without forming its blocks (the body form stores no W: nlgs finds out itself).
+  if (!problem.bodies && !ctx.positiveDiagonal(/*bilateral=*/false))
     warm.status = SolveStatus::kZeroDiagonal;  // as nlgs would say, without its set-up
   else
     warm = runNonlinearGaussSeidel(warm_ctx, lambda);

@@ -66,8 +66,10 @@ struct SolveContext {
   // W_nn of contact i: its first diagonal entry (a block-sparse W's stored diagonal block; 0
   // when none is stored). The body form has no W: 0.
   double normalDiagonal(int i) const;
-  // Gauss-Seidel can start: every active contact has a positive W_nn + r.
-  bool positiveDiagonal() const;
+  // Every active contact has a positive W_nn + r (Gauss-Seidel's scalar local steps divide by
+  // it). `bilateral`: bilateral contacts too; without, only the others (their local step
+  // inverts the whole block, so W_nn alone does not stop nlgs there).
+  bool positiveDiagonal(bool bilateral = true) const;
 };
 
 struct KernelReport {
