@@ -86,10 +86,10 @@ constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
 // well conditioned on the active set apgd ends in tens of iterations (box pyramids: 30-60)
 // against newton's 8-20 slow steps; where it is not (BoxesStack1, OneObject: thousands) the
 // scout's iterate is dropped and newton starts where it would have. It runs kAutoScoutFirst
-// iterations, then on while the rate of its last slice reaches the tolerance within
-// kAutoScoutIterations in all. Its first 20 products with W cost less than two dense
-// factorizations (2 n³/3 flops) from 30 rows up: below that the scout could cost more than
-// newton's whole solve.
+// iterations, then on, in slices no longer than the scout so far, while the rate of its last
+// slice reaches the tolerance within kAutoScoutIterations in all. Its first 20 products with W
+// cost less than two dense factorizations (2 n³/3 flops) from 30 rows up: below that the
+// scout could cost more than newton's whole solve.
 constexpr int kAutoScoutFirst = 20;
 constexpr int kAutoScoutIterations = 100;
 constexpr int kAutoScoutRows = 30;
@@ -807,8 +807,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (cur.scout) {
       // Go on while the rate of its last slice (the first: from the start) reaches the
       // tolerance within its allowance, as the probe's stages do: apgd's rate slows as it
-      // goes, and a scout that runs out of its allowance is pure loss. Otherwise newton
-      // starts from what it would have started from.
+      // goes, and a scout that runs out of its allowance is pure loss. A slice is at most as
+      // long as the scout so far, so that a rate which slows within it is seen after at most
+      // twice the iterations it took to predict it. Otherwise newton starts from what it
+      // would have started from.
       const double slice_start = scout.iterations == 0 ? probe_start : scout.last_residual;
       scout.iterations += r.iterations;
       scout.last_residual = residual;
@@ -816,7 +818,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           r.status != SolveStatus::kTimeBudget) {
         const double needed = iterationsToReach(params.tolerance, slice_start, residual, r.iterations);
         if (scout.iterations + needed <= kAutoScoutIterations) {
-          cur.slice = static_cast<int>(std::ceil(needed)) + 1;
+          cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, scout.iterations);
           continue;
         }
       }
