@@ -5,7 +5,7 @@
 //
 //   work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]
 //                  [--families fc3d,lcp,scenes,mujoco] [--filter SUBSTRING] [--solvers a,b,...]
-//                  [--quick] [--regret FILE]
+//                  [--quick] [--regret FILE] [--mujoco-models a.xml,b.xml,...] [--mujoco-steps 100,300]
 //
 // At the end it writes the "auto regret" table (markdown, --regret, default
 // bench/results/auto_regret.md): per problem and tolerance, auto's time over the fastest of
@@ -49,7 +49,7 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
   CLI::App app{"work_precision: work-precision benchmark (every solver and peer over a tolerance sweep)"};
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   double budget = opt.budget;
-  std::string families, solvers, tolerances;  // comma lists
+  std::string families, solvers, tolerances, mujoco_models, mujoco_steps;  // comma lists
   app.add_option("--problems", opt.problems_dir, "the problem files (Siconos .dat, FCLIB .hdf5)")
       ->capture_default_str();
   app.add_option("--scenes", opt.scenes_dir, "the scenes directory")->capture_default_str();
@@ -65,6 +65,12 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
   CLI::Option* quick =
       app.add_flag("--quick", "a short run: 4 tolerances, small scenes, budget <= 1 s, 1 repeat");
   app.add_option("--regret", opt.regret, "the auto regret table to write (markdown)")->capture_default_str();
+  // Any MuJoCo model can be studied, not only the four the study ships with: a model auto was
+  // never tried on is the fairest test of how it decides.
+  app.add_option("--mujoco-models", mujoco_models, "the mujoco family's models (comma list of MJCF files)")
+      ->default_str("22_humanoids,humanoid100,particle,rope of MuJoCo's samples");
+  app.add_option("--mujoco-steps", mujoco_steps, "the mujoco family's simulated steps taken as problems (comma list)")
+      ->default_str("100,300");
   try {
     app.parse(argc, argv);
     if (app.count("--families")) {
@@ -74,6 +80,11 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
     if (app.count("--solvers")) {
       const auto v = split(solvers);
       opt.solvers = {v.begin(), v.end()};
+    }
+    if (app.count("--mujoco-models")) opt.mujoco_models = split(mujoco_models);
+    if (app.count("--mujoco-steps")) {
+      opt.mujoco_steps.clear();
+      for (const std::string& step : split(mujoco_steps)) opt.mujoco_steps.push_back(std::stoi(step));
     }
     // --quick sets the tolerances and caps the budget: in command-line order, the later wins.
     for (const CLI::Option* given : app.parse_order()) {
@@ -93,8 +104,8 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
     }
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
-  } catch (const std::exception& e) {  // a bad number in --tolerances
-    std::cerr << "work_precision: bad --tolerances value (" << e.what() << ")\n";
+  } catch (const std::exception& e) {  // a bad number in --tolerances or --mujoco-steps
+    std::cerr << "work_precision: bad --tolerances or --mujoco-steps value (" << e.what() << ")\n";
     return 2;
   }
   return -1;
