@@ -106,6 +106,9 @@ constexpr int kAutoScoutRows = 30;
 // sweeps elsewhere (ball and box stacks, where over-relaxation would pay only later).
 constexpr double kAutoOmegaMax = 1.5;
 constexpr int kAutoOmegaTrial = 10;
+// A member that progresses but whose rate needs more than this many times the solve's
+// iterations so far lets the members not tried yet run one slice each (runPortfolio).
+constexpr double kAutoExploreFactor = 4.0;
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
  public:
@@ -891,6 +894,19 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (!members[(m + k) % members.size()].tried) untried = (m + k) % members.size();
     if (progressing) {
       cur.slice = std::min(2 * cur.slice, 1 << 28);
+      // Progressing, but at a rate (per iteration, its last slice) that needs more than
+      // kAutoExploreFactor times the iterations the solve took so far: the next member not
+      // tried yet runs one slice from the best iterate, no longer than the solve so far, so
+      // that a member which keeps halving the residual in ever longer slices cannot hide a
+      // faster one. Counted in iterations, not seconds: the same problem takes the same path.
+      if (by_residual && untried != members.size()) {
+        const double per_iteration = std::log(start_residual / best_residual) / r.iterations;
+        if (std::log(best_residual / params.tolerance) > kAutoExploreFactor * used * per_iteration) {
+          PortfolioMember& next = members[untried];
+          if (next.kind != SolverKind::kLemke) next.slice = std::max(1, std::min(next.slice, used));  // pivots: not sliced
+          m = untried;
+        }
+      }
       continue;
     }
     // Stalled: the next member not tried yet, else the one that lowered the residual
