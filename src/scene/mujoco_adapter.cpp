@@ -301,7 +301,8 @@ std::string extractProblem(const mjModel* m, const mjData* d, const MujocoExtrac
   const int n = static_cast<int>(out->efc_row.size());
   const bool block_sparse =
       options.storage == MujocoExtractOptions::Storage::kBlockSparse ||
-      (options.storage == MujocoExtractOptions::Storage::kAuto && n > options.dense_max_rows);
+      (options.storage == MujocoExtractOptions::Storage::kAuto && n > options.dense_max_rows &&
+       detail::fillOfW(m, d, *out, row_of_efc) < options.dense_min_fill);
   if (block_sparse)
     out->problem.W = detail::blockSparseW(m, d, *out, row_of_efc);
   else

@@ -65,6 +65,15 @@ Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& m
   return W;
 }
 
+double fillOfW(const mjModel* m, const mjData* d, const MujocoProblem& mp, const std::vector<int>& row_of_efc) {
+  const std::size_t n = mp.efc_row.size();
+  if (n == 0) return 0.0;
+  std::size_t nonzero = 0;
+  for (std::size_t p = 0; p < n; ++p)
+    forEachARInRow(m, d, mp.efc_row[p], [&](int col, double) { nonzero += row_of_efc[col] >= 0 ? 1 : 0; });
+  return static_cast<double>(nonzero) / (static_cast<double>(n) * static_cast<double>(n));
+}
+
 core::BlockSparseMatrix blockSparseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,
                                      const std::vector<int>& row_of_efc) {
   const std::vector<int> offsets = mp.problem.rowOffsets();

@@ -23,6 +23,9 @@ std::vector<int> fillRows(const mjModel* m, const mjData* d, const MujocoExtract
 Eigen::MatrixXd denseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,
                        const std::vector<int>& row_of_efc);
 
+// The share of W's n x n entries (the kept rows' AR) that are nonzero.
+double fillOfW(const mjModel* m, const mjData* d, const MujocoProblem& mp, const std::vector<int>& row_of_efc);
+
 // The same W block-sparse: one block per pair of coupled entries.
 core::BlockSparseMatrix blockSparseW(const mjModel* m, const mjData* d, const MujocoProblem& mp,
                                      const std::vector<int>& row_of_efc);

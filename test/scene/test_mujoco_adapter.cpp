@@ -30,6 +30,7 @@ namespace {
 const std::string kModels = LCS_MUJOCO_MODEL_DIR;
 const std::string kHumanoid = kModels + "/humanoid/humanoid.xml";
 const std::string kParticle = kModels + "/composite/particle.xml";
+const std::string kSoftbox = kModels + "/composite/softbox.xml";
 
 bool haveModel(const std::string& path) { return std::ifstream(path).good(); }
 
@@ -231,6 +232,36 @@ TEST(MujocoCrossCheck, ScalingAndStorageDoNotChangeTheAnswer) {
     ++checked;
   });
   EXPECT_GT(checked, 5);
+}
+
+// A soft body's bodies share one tree, so its W is full: the automatic storage keeps it dense
+// past dense_max_rows (a block per pair of coupled entries would cost more than the entries),
+// the same numbers as the block-sparse W, and both storages give the same forces.
+TEST(MujocoCrossCheck, AFullWStaysDenseWhateverItsSize) {
+  if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
+  MujocoOptions options;
+  options.cone = "elliptic";
+  auto world = loadWorld(kSoftbox, options);
+  forwardToConstraints(world->model(), world->data(), /*run_solver=*/false);
+  MujocoProblem automatic, sparse;
+  ASSERT_EQ(extractProblem(world->model(), world->data(), MujocoExtractOptions(), &automatic), "");
+  MujocoExtractOptions block_sparse;
+  block_sparse.storage = MujocoExtractOptions::Storage::kBlockSparse;
+  ASSERT_EQ(extractProblem(world->model(), world->data(), block_sparse, &sparse), "");
+  const int n = automatic.problem.rowCount();
+  ASSERT_GT(n, MujocoExtractOptions().dense_max_rows);
+  EXPECT_EQ(automatic.problem.W.index(), 0u);  // dense
+  ASSERT_EQ(sparse.problem.W.index(), 1u);
+  const Eigen::MatrixXd dense = core::toDense(automatic.problem.W);
+  EXPECT_GE(static_cast<double>((dense.array() != 0.0).count()) / (double(n) * n),
+            MujocoExtractOptions().dense_min_fill);
+  EXPECT_LT((core::toDense(sparse.problem.W) - dense).cwiseAbs().maxCoeff(), 1e-14);
+  const core::SolverParams nlgs = params(core::SolverKind::kNlgs, 1e-10, 100000);
+  const core::SolveResult a = core::solveProblem(automatic.problem, nlgs);
+  const core::SolveResult b = core::solveProblem(sparse.problem, nlgs);
+  ASSERT_TRUE(a.converged) << a.message;
+  ASSERT_TRUE(b.converged) << b.message;
+  EXPECT_LT((a.forces - b.forces).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + a.forces.cwiseAbs().maxCoeff()));
 }
 
 TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {

@@ -109,9 +109,14 @@ struct MujocoExtractOptions {
   bool fold_dropped = false;
   bool scale_rows = true;  // the row scaling described at the top of this file
   // W storage: dense, block-sparse (one block per pair of coupled entries), or automatic:
-  // block-sparse when the problem has more than `dense_max_rows` rows.
+  // block-sparse when the problem has more than `dense_max_rows` rows and fewer than
+  // `dense_min_fill` of W's entries are nonzero.
   enum class Storage { kAuto, kDense, kBlockSparse } storage = Storage::kAuto;
   int dense_max_rows = 200;  // mujoco_bench: block-sparse wins from a few hundred rows
+  // A W this full is dense whatever its size: a block per pair of coupled entries then costs
+  // more than the entries themselves (soft bodies and composites, whose bodies share one
+  // tree: composite/softbox's 735 rows are 100 % full, 461 041 blocks mostly 1 x 1).
+  double dense_min_fill = 0.25;
 };
 
 struct MujocoProblem {

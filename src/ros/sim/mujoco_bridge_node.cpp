@@ -53,6 +53,7 @@ MujocoBridgeNode::MujocoBridgeNode(const ros::NodeHandle& nh, const ros::NodeHan
   extract_.include_limits = settings_.include_limits;
   extract_.include_equalities = settings_.include_equalities;
   extract_.dense_max_rows = settings_.dense_max_rows;
+  extract_.dense_min_fill = settings_.dense_min_fill;
   if (settings_.storage == "dense") extract_.storage = scene::MujocoExtractOptions::Storage::kDense;
   if (settings_.storage == "block_sparse")
     extract_.storage = scene::MujocoExtractOptions::Storage::kBlockSparse;

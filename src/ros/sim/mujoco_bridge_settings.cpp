@@ -28,6 +28,8 @@ std::string validate(const MujocoBridgeSettings& s) {
   if (s.storage != "auto" && s.storage != "dense" && s.storage != "block_sparse")
     return "parameter storage must be auto, dense or block_sparse";
   if (s.dense_max_rows < 0) return "parameter dense_max_rows must be >= 0";
+  if (!finite(s.dense_min_fill) || s.dense_min_fill < 0.0)
+    return "parameter dense_min_fill must be >= 0 (above 1: block-sparse above dense_max_rows whatever the fill)";
   if (!finite(s.max_rel_warn) || s.max_rel_warn <= 0.0) return "parameter max_rel_warn must be > 0";
   return "";
 }
@@ -42,7 +44,8 @@ std::string loadMujocoBridgeSettings(const ros::NodeHandle& pnh, MujocoBridgeSet
        LCS_PARAM_FIELD(s, mujoco_tolerance), LCS_PARAM_FIELD(s, compare), LCS_PARAM_FIELD(s, reference),
        LCS_PARAM_FIELD(s, steps), LCS_PARAM_FIELD(s, dt), LCS_PARAM_FIELD(s, min_report_subscribers),
        LCS_PARAM_FIELD(s, include_limits), LCS_PARAM_FIELD(s, include_equalities),
-       LCS_PARAM_FIELD(s, storage), LCS_PARAM_FIELD(s, dense_max_rows), LCS_PARAM_FIELD(s, max_rel_warn),
+       LCS_PARAM_FIELD(s, storage), LCS_PARAM_FIELD(s, dense_max_rows), LCS_PARAM_FIELD(s, dense_min_fill),
+       LCS_PARAM_FIELD(s, max_rel_warn),
        LCS_PARAM_FIELD(s, print_summary)},
       [s] { return validate(*s); });
 }

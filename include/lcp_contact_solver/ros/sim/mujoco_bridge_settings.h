@@ -32,7 +32,8 @@ struct MujocoBridgeSettings : LinkSettings {
   bool include_limits = true;      // joint/tendon limits as unilateral rows
   bool include_equalities = true;  // equality constraints as bilateral rows
   std::string storage = "auto";    // W: auto | dense | block_sparse
-  int dense_max_rows = 200;        // auto: block-sparse above this many rows
+  int dense_max_rows = 200;        // auto: block-sparse above this many rows...
+  double dense_min_fill = 0.25;    // ...unless at least this share of W's entries is nonzero
   double max_rel_warn = 1e-6;      // cross_check: warn when the relative difference exceeds it
   bool print_summary = false;      // status lines and the final summary on stdout (demo)
 };
