@@ -36,7 +36,8 @@ using Clock = std::chrono::steady_clock;
 // diagonally dominant on the normal rows), rank deficiency (active rows above the bodies'
 // 6 DoF each when the body form is known, else a quarter of the contacts with a nearly
 // parallel partner) and multi-point contacts (a quarter of the contacts in groups of three or
-// more coupled to exactly the same contacts: several points between the same bodies), which
+// more coupled to exactly the same contacts: several points between the same bodies; both
+// shares over the contacts that are not bilateral, joints having no contact point), which
 // decide between Gauss-Seidel and apgd down to 1e-4 and put an apgd scout before a planned
 // newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
@@ -183,7 +184,8 @@ struct AutoFeatures {
 // The normal coupling κ (above) and the fraction of contacts whose normal row is nearly
 // parallel to another's in the W metric (|W_ij| >= kAutoRedundant √(W_ii W_jj)): several
 // contacts between the same two bodies (a face on a face), i.e. more rows than the bodies'
-// DoF can tell apart, the rank-deficiency estimate when the bodies are not known.
+// DoF can tell apart, the rank-deficiency estimate when the bodies are not known. Both
+// shares are over the active contacts that are not bilateral (a joint is no contact point).
 struct Coupling {
   double kappa = 0.0;
   // max_i Σ_{j>i} |W_ij| / (W_ii − Σ_{j<i} |W_ij|), infinite where a denominator is not
@@ -227,12 +229,14 @@ struct CouplingSet {
 // The share of active contacts in a group of kAutoMultiPoint or more that are coupled to exactly
 // the same contacts: several contact points between the same bodies (a face on a face or on the
 // ground), more rows than those bodies' degrees of freedom. A set holding every active contact
-// says nothing (one body, or a deformable one whose compliance couples everything).
+// says nothing (one body, or a deformable one whose compliance couples everything). Bilateral
+// rows are joints, not contact points: they are counted in the sets (a contact coupled to
+// them) but not as members of a group, and `contacts` is the number of the others.
 double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& coupled, std::vector<CouplingSet>& sets,
-                       int active) {
+                       int active, int contacts) {
   sets.clear();
   for (std::size_t i = 0; i < coupled.size(); ++i) {
-    if (ctx.ignored[i]) continue;
+    if (ctx.ignored[i] || ctx.problem->contacts[i].type == ContactType::kBilateral) continue;
     coupled[i].add(static_cast<int>(i));
     if (coupled[i].size < active) sets.push_back(coupled[i]);
   }
@@ -242,7 +246,7 @@ double multiPointShare(const SolveContext& ctx, std::vector<CouplingSet>& couple
     while (b < sets.size() && sets[b] == sets[a]) ++b;
     if (b - a >= static_cast<std::size_t>(kAutoMultiPoint)) grouped += static_cast<int>(b - a);
   }
-  return static_cast<double>(grouped) / active;
+  return contacts > 0 ? static_cast<double>(grouped) / contacts : 0.0;
 }
 
 // normalCoupling's scratch, kept per thread: no allocation on a microsecond solve after the
@@ -316,7 +320,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
     }
   }
   double sum = 0.0, gs_bound = 0.0;
-  int active = 0, repeated = 0;
+  int active = 0, repeated = 0, contacts = 0;  // contacts: the active ones not bilateral
   bool positive = true;
   for (int i = 0; i < nc; ++i)
     if (!ctx.ignored[i] && !(diag[i] + ctx.regularization > 0.0)) positive = false;
@@ -326,16 +330,18 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
     const double pivot = diag[i] - lower_sum[i];
     gs_bound = std::max(gs_bound, pivot > 0.0 ? (off_sum[i] - lower_sum[i]) / pivot
                                               : std::numeric_limits<double>::infinity());
-    repeated += redundancy && redundant[i] ? 1 : 0;
     ++active;
+    if (p.contacts[i].type == ContactType::kBilateral) continue;  // a joint: no contact point
+    repeated += redundancy && redundant[i] ? 1 : 0;
+    ++contacts;
   }
   Coupling c;
   c.positive_diagonal = positive;
   if (active > 0) {
     c.kappa = sum / active;
     c.gs_bound = gs_bound;
-    c.redundant = static_cast<double>(repeated) / active;
-    if (redundancy) c.multi_point = multiPointShare(ctx, coupled, work.sets, active);
+    c.redundant = contacts > 0 ? static_cast<double>(repeated) / contacts : 0.0;
+    if (redundancy) c.multi_point = multiPointShare(ctx, coupled, work.sets, active, contacts);
   }
   return c;
 }
