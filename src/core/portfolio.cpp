@@ -474,8 +474,10 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
   }
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
   // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
-  // Gauss-Seidel first at any tolerance and size.
-  if (f.sparse && f.coupling < kAutoSparseGs && !f.rank_deficient)
+  // Gauss-Seidel first at any tolerance and size; so too a dense W above kAutoNewtonRows,
+  // where the plan is first-order either way and a sweep, like an apgd iteration, is one pass
+  // over W whatever its storage (a MuJoCo W stored dense because it is full).
+  if ((f.sparse || f.rows > kAutoNewtonRows) && f.coupling < kAutoSparseGs && !f.rank_deficient)
     return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   // Between the first-order methods: Gauss-Seidel's early sweeps are its fast ones, so it goes
   // first down to kAutoModerateTolerance unless W is rank-deficient or has multi-point contacts,
