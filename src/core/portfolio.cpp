@@ -38,12 +38,13 @@ using Clock = std::chrono::steady_clock;
 // parallel partner) and multi-point contacts (a quarter of the contacts in groups of three or
 // more coupled to exactly the same contacts: several points between the same bodies; both
 // shares over the contacts that are not bilateral, joints having no contact point), which
-// decide between Gauss-Seidel and apgd down to 1e-4 and put an apgd scout before a planned
+// decide between Gauss-Seidel and apgd down to 1e-4 (at any tolerance where most rows are
+// bilateral) and put an apgd scout before a planned
 // newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start (but not on a dense symmetric LCP whose plan
-// is newton's few Cholesky steps), a probe of its sweeps: three, then stage by
-// stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
+// is newton's few Cholesky steps), a probe of its sweeps: three (three more if they raised
+// the residual from the start), then stage by stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
 // (probeAllowance). A few weakly coupled contacts with exact local solves end there, at a
 // fraction of a Newton step's cost. Otherwise a Gauss-Seidel plan goes on from the probe's
@@ -441,6 +442,18 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
 }
 
 
+// More than half the active rows bilateral (joints, a soft body's equality constraints).
+bool mostlyBilateral(const SolveContext& ctx) {
+  int bilateral = 0, rows = 0;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    const Contact& c = ctx.problem->contacts[i];
+    rows += c.rows;
+    bilateral += c.type == ContactType::kBilateral ? c.rows : 0;
+  }
+  return 2 * bilateral > rows;
+}
+
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
 Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_symmetric) {
   using K = SolverKind;
@@ -496,8 +509,16 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
     return {K::kNlgs, K::kNewton, K::kProx, K::kApgd};
   // Block-sparse W above the small size: a Newton step is a sparse LU (a large constant per
   // row), so the first-order methods go first and newton/prox take over when they stall.
+  // Gauss-Seidel first down to kAutoModerateTolerance (gs_suits), and at any tolerance where
+  // most rows are bilateral and its rate holds (no multi-point contacts, no rank deficiency,
+  // below): a soft body's or a cloth's equality rows are a linear system, solved at a steady
+  // rate with no active set to settle, whose widely spread spectrum makes apgd's steps crawl
+  // (MuJoCo's softbox: 117 sweeps against apgd's 11 578 iterations). Where most rows are
+  // contacts Gauss-Seidel's rate slows as the active set settles (sphere_pile_40 at 1e-5: apgd's
+  // 5 351 iterations, nlgs stalled).
+  const bool gs_first = gs_suits || (!f.rank_deficient && !f.multi_point && mostlyBilateral(ctx));
   if (f.sparse && f.rows > kAutoNewtonRows)
-    return gs_suits ? Plan{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
+    return gs_first ? Plan{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
                     : Plan{K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   const int newton_rows = p.tolerance < kAutoNewtonTolerance ? kAutoNewtonRowsTight : kAutoNewtonRows;
   if (f.rows <= newton_rows) {
@@ -506,7 +527,7 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
     *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
     return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   }
-  return gs_suits ? Plan{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
+  return gs_first ? Plan{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
                   : Plan{K::kApgd, K::kProx, K::kNewton, K::kNlgs};
 }
 
@@ -850,6 +871,21 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (probe_sweeps == 0 && friction && !sticking_tried && !failedToRun(r.status) &&
           stickingPays(ctx, best, needed) && stickingPathSolves())
         break;
+      // Gauss-Seidel's first sweeps from the start can raise the residual while the iterate is
+      // on its way (a MuJoCo soft body's joints: 0.99, then 2.5, 1.4, 1.1): a first stage that
+      // did goes on once, measured from its own end, and its iterate is the best so far (a
+      // Gauss-Seidel plan went on from the start again: 3 sweeps lost, and the over-relaxation
+      // trial then measured its plain window through that rise and kept an ω that doubled the
+      // sweeps).
+      if (probe_sweeps == 0 && r.iterations > 0 && !(best_residual < stage_start) && std::isfinite(residual) &&
+          !failedToRun(r.status) && r.status != SolveStatus::kTimeBudget) {
+        probe_sweeps = r.iterations;
+        best.swap(x);
+        best_residual = stage_start = residual;
+        best_error = r.solver_error;
+        best_model = r.friction_model;
+        continue;
+      }
       probe_sweeps += r.iterations;
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
@@ -873,8 +909,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       startPlan();
       m = 0;
       const SolverKind first = planned().front();  // the scout starts from the start anyway
+      // newton not from an iterate above the start's residual (the probe's first stage rose).
       const bool keep = first == SolverKind::kNlgs || first == SolverKind::kPgs ||
-                        (first == SolverKind::kNewton && probe_sweeps <= kAutoProbeSweeps);
+                        (first == SolverKind::kNewton && probe_sweeps <= kAutoProbeSweeps &&
+                         !(best_residual > probe_start));
       if (!keep) {
         best = origin;
         best_residual = probe_start;

@@ -265,10 +265,14 @@ TEST(MujocoCrossCheck, AFullWStaysDenseWhateverItsSize) {
 }
 
 // A soft body at rest on the ground (softbox, elliptic cone, step 300: 651 bilateral rows, 28
-// frictional contacts, W full): auto's plan for a dense W of 735 rows at 1e-6 starts with apgd,
-// which halves its residual slice after slice but in ever longer slices (14 615 iterations
-// before the rotation gave a member not yet tried a slice when the current one is too slow),
-// where nlgs needs about 150 sweeps and prox about 70 iterations.
+// frictional contacts, W full, no multi-point contact). auto once crawled there: its plan for a
+// dense W of 735 rows at 1e-6 started with apgd, which halved its residual slice after slice but
+// in ever longer slices (14 615 iterations before the rotation gave a member not yet tried a
+// slice when the current one is too slow). Then it took 2-3x nlgs's sweeps: apgd first at 1e-5
+// (its first slice stalled, prox took over), and at 1e-6 nlgs from the start again after the
+// probe's first sweeps raised the residual (0.99, then 2.5, 1.4, 1.1), with an over-relaxation
+// its trial kept because the plain window it was judged against included that rise. Now auto
+// takes about nlgs's own sweeps at either tolerance.
 TEST(MujocoCrossCheck, AutoDoesNotCrawlOnASoftBody) {
   if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
   MujocoOptions options;
@@ -284,10 +288,14 @@ TEST(MujocoCrossCheck, AutoDoesNotCrawlOnASoftBody) {
   int frictional = 0;
   for (const core::Contact& c : mp.problem.contacts) frictional += c.type == core::ContactType::kFrictional;
   ASSERT_GT(frictional, 0) << "the box should rest on the ground by step 300";
-  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, 1e-6, 1000000));
-  ASSERT_TRUE(r.converged) << r.message;
-  EXPECT_LE(problemResidual(mp, r.forces), 1e-6);  // recomputed from the forces
-  EXPECT_LT(r.iterations, 2000) << r.solver;
+  for (double tolerance : {1e-5, 1e-6}) {
+    const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, tolerance, 1000000));
+    ASSERT_TRUE(nlgs.converged) << nlgs.message;
+    const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 1000000));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_LE(problemResidual(mp, r.forces), tolerance);  // recomputed from the forces
+    EXPECT_LE(r.iterations, 1.25 * nlgs.iterations) << tolerance << " " << r.solver;
+  }
 }
 
 TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {
