@@ -44,7 +44,8 @@ using Clock = std::chrono::steady_clock;
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start (but not on a dense symmetric LCP whose plan
 // is newton's few Cholesky steps), a probe of its sweeps: three (three more if they raised
-// the residual from the start), then stage by stage while the rate of the last stage reaches the tolerance, with a margin of 2, within
+// the residual from the start), then stage by stage while the rate of the last stage reaches
+// the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
 // (probeAllowance). A few weakly coupled contacts with exact local solves end there, at a
 // fraction of a Newton step's cost. Otherwise a Gauss-Seidel plan goes on from the probe's
@@ -971,6 +972,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   if (members.empty() && report.status != SolveStatus::kConverged) {  // (converged: a warm start's active set)
     report.status = last_failure;
     report.message = "auto: every member failed; last " + last_message;
+  }
+  // The probe's restarted stage may have made an iterate above the start's residual the best
+  // so far: a solve that ended without lowering it returns the start.
+  if (best_residual > probe_start) {
+    best = origin;
+    best_error = probe_start;
+    best_model = FrictionModel::kCoulombDisc;
   }
   lambda = best;
   report.iterations = used;

@@ -458,6 +458,44 @@ TEST(Portfolio, TheProbeGoesOnWhileItsRateReachesTheTolerance) {
   }
 }
 
+// Gauss-Seidel's first sweeps from zero can raise the residual (here 8 equality rows all
+// coupled by 100 to one another and a contact: above the start's for a dozen sweeps).
+// The probe then sweeps once more from its own iterate and takes it as the best so far; a
+// solve that maxIt ends there returns the start, not an iterate worse than it. With room to
+// go on, the solve converges.
+TEST(Portfolio, AProbeThatRaisesTheResidualNeverReturnsWorseThanTheStart) {
+  const int n = 8;
+  Problem p;
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n + 3, n + 3);
+  W.topLeftCorner(n, n).setConstant(100.0);
+  W.diagonal().array() += 1.0;
+  W(n, n) = 10.0;
+  W.block(n, 0, 1, n).setConstant(0.5);  // one island: the contact is coupled to the rows
+  W.block(0, n, n, 1).setConstant(0.5);
+  p.W = W;
+  p.d_free = Eigen::VectorXd::Zero(n + 3);
+  for (int i = 0; i < n; ++i) {
+    p.contacts.push_back(Contact{i, ContactType::kBilateral, 1, Contact::kMuDefault});
+    p.d_free(i) = i % 2 ? -1.0 : 1.0;
+  }
+  p.contacts.push_back(Contact{n, ContactType::kFrictional, 3, 0.5});  // friction: nlgs probes
+  p.d_free(n) = 0.1;  // separating: no force
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n + 3);
+  const double start = naturalMapResidual(p, effectiveMu(p, SolverParams().mu), zero, p.d_free);
+  SolverParams nlgs = params(SolverKind::kNlgs, 1e-12, 3);
+  nlgs.displayDebug = true;
+  const SolveResult sweeps = solveProblem(p, nlgs);
+  ASSERT_EQ(sweeps.residual_history.size(), 3u);
+  for (double h : sweeps.residual_history) ASSERT_GT(h, start);  // the premise: the sweeps rise
+  const SolveResult stopped = solveProblem(p, params(SolverKind::kAuto, 1e-12, 5));
+  EXPECT_EQ(stopped.status, SolveStatus::kMaxIterations);
+  EXPECT_EQ(stopped.iterations, 5);
+  EXPECT_LE(recomputedResidual(p, stopped), start);
+  const SolveResult solved = solveProblem(p, params(SolverKind::kAuto, 1e-8, 100000));
+  ASSERT_TRUE(solved.converged) << solved.solver << ": " << solved.message;
+  EXPECT_LE(recomputedResidual(p, solved), 1e-8);
+}
+
 // A frictionless stack (μ = 0: one normal row per contact) has a symmetric, coupled W: a
 // convex QP, which newton's active-set path ends in a few Cholesky steps, so auto starts
 // there, without the Gauss-Seidel probe (it would only delay them). The same W made
