@@ -209,6 +209,22 @@ int activeContacts(const SolveContext& ctx) {
   return n;
 }
 
+// The active contacts' rows, and how many of them are bilateral.
+struct ActiveRows {
+  int all = 0;
+  int bilateral = 0;
+};
+ActiveRows activeRows(const SolveContext& ctx) {
+  ActiveRows rows;
+  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
+    if (ctx.ignored[i]) continue;
+    const Contact& c = ctx.problem->contacts[i];
+    rows.all += c.rows;
+    rows.bilateral += c.type == ContactType::kBilateral ? c.rows : 0;
+  }
+  return rows;
+}
+
 // The set of contacts one contact is coupled to, itself included, kept as a sum of a hash of
 // each member (order-free) and its size: two contacts between the same bodies have the same set.
 struct CouplingSet {
@@ -433,26 +449,15 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.rank_deficient = c.redundant >= kAutoRedundantShare;
     f.multi_point = c.multi_point >= kAutoRedundantShare;
   }
-  if (body_dof > 0) {
-    int active_rows = 0;
-    for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i)
-      if (!ctx.ignored[i]) active_rows += ctx.problem->contacts[i].rows;
-    f.rank_deficient = f.rank_deficient || active_rows > body_dof;
-  }
+  if (body_dof > 0) f.rank_deficient = f.rank_deficient || activeRows(ctx).all > body_dof;
   return f;
 }
 
 
 // More than half the active rows bilateral (joints, a soft body's equality constraints).
 bool mostlyBilateral(const SolveContext& ctx) {
-  int bilateral = 0, rows = 0;
-  for (std::size_t i = 0; i < ctx.problem->contacts.size(); ++i) {
-    if (ctx.ignored[i]) continue;
-    const Contact& c = ctx.problem->contacts[i];
-    rows += c.rows;
-    bilateral += c.type == ContactType::kBilateral ? c.rows : 0;
-  }
-  return 2 * bilateral > rows;
+  const ActiveRows rows = activeRows(ctx);
+  return 2 * rows.bilateral > rows.all;
 }
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
