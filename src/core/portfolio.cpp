@@ -594,6 +594,7 @@ struct PortfolioMember {
   int retry_origin = 0;  // 0 not needed, 1 due, 2 done
   bool probe = false;    // one slice only, then out of the rotation
   bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
+  int warmup_credit = 0;  // newton after the probe: the warm-up sweeps the probe ran (its first run only)
 };
 
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
@@ -603,6 +604,7 @@ struct Workspace {
   std::vector<PortfolioMember> members;
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
+  Eigen::VectorXd warmup;  // the probe's iterate after newton's warm-up sweeps
   GaussSeidelMemo gs_memo;  // the probe's blocks serve every later Gauss-Seidel slice
   ApgdMemo apgd_memo;       // an apgd slice resumes the last one when handed its answer back
 };
@@ -669,6 +671,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const double probe_start = best_residual;
   double stage_start = best_residual;
   int probe_sweeps = 0;
+  double warmup_residual = std::numeric_limits<double>::infinity();  // work.warmup's
+  double warmup_error = 0.0;
+  FrictionModel warmup_model = FrictionModel::kCoulombDisc;
   std::unique_ptr<Problem> assembled;      // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
@@ -778,6 +783,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       }
       member_params.sor = gs_omega;
     }
+    member.warmup_sweeps_done = cur.warmup_credit;
+    member.warmup_start_was_warm = cur.warmup_credit > 0 && !origin.isZero(0.0);
+    cur.warmup_credit = 0;
     const KernelReport r = runKernel(cur.kind, member, x);
     if (cur.scout) scout.x = x;
     // A kernel that let a force through on an ignored contact measured the rest against it
@@ -893,6 +901,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         continue;
       }
       probe_sweeps += r.iterations;
+      if (probe_kind == SolverKind::kNlgs && probe_sweeps == kNewtonWarmupSweeps && !(best_residual > probe_start)) {
+        work.warmup = best;  // newton's warm-up done: where it goes on from if the probe runs past it
+        warmup_residual = best_residual;
+        warmup_error = best_error;
+        warmup_model = best_model;
+      }
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
@@ -903,23 +917,42 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
+          // Before newton a stage ends at its warm-up's last sweep, whose iterate is kept.
+          if (probe_kind == SolverKind::kNlgs && !plan.empty() && plan.front() == SolverKind::kNewton &&
+              probe_sweeps < kNewtonWarmupSweeps && probe_sweeps + cur.slice > kNewtonWarmupSweeps)
+            cur.slice = kNewtonWarmupSweeps - probe_sweeps;
           stage_start = best_residual;
           continue;
         }
       }
       // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate,
-      // and so does newton if the probe was no longer than its own warm-up; any other starts
-      // from the start as it would have without the probe (apgd from a Gauss-Seidel iterate
-      // crawled on the box pyramids: 80×; newton from 35 sweeps on a box stack stalled twice
-      // and restarted: 3.5×).
+      // and so does newton if the probe was no longer than its own warm-up: nlgs sweeps from
+      // the start are that warm-up, which then runs only the rest of its sweeps (newton's path
+      // is the one it takes alone; with 20 more sweeps after 3 of the probe's, a box stack's
+      // Newton steps stalled four times: 1.4x). Any other member starts from the start as it
+      // would have without the probe (apgd from a Gauss-Seidel iterate crawled on the box
+      // pyramids: 80×; newton from 35 sweeps on a box stack stalled twice and restarted: 3.5×).
       startPlan();
       m = 0;
       const SolverKind first = planned().front();  // the scout starts from the start anyway
+      const bool warmup = probe_kind == SolverKind::kNlgs;  // newton's warm-up sweeps are nlgs's
       // newton not from an iterate above the start's residual (the probe's first stage rose).
-      const bool keep = first == SolverKind::kNlgs || first == SolverKind::kPgs ||
-                        (first == SolverKind::kNewton && probe_sweeps <= kAutoProbeSweeps &&
-                         !(best_residual > probe_start));
-      if (!keep) {
+      const bool keep =
+          first == SolverKind::kNlgs || first == SolverKind::kPgs ||
+          (first == SolverKind::kNewton && probe_sweeps <= (warmup ? kNewtonWarmupSweeps : kAutoProbeSweeps) &&
+           !(best_residual > probe_start));
+      // A probe that ran past newton's warm-up hands newton the iterate at its end.
+      const bool past_warmup = warmup && first == SolverKind::kNewton && !keep && std::isfinite(warmup_residual);
+      if (past_warmup) {
+        best = work.warmup;
+        best_residual = warmup_residual;
+        best_error = warmup_error;
+        best_model = warmup_model;
+      }
+      if ((keep || past_warmup) && warmup && first == SolverKind::kNewton)
+        for (PortfolioMember& mem : members)
+          if (mem.kind == SolverKind::kNewton) mem.warmup_credit = std::min(probe_sweeps, kNewtonWarmupSweeps);
+      if (!keep && !past_warmup) {
         best = origin;
         best_residual = probe_start;
         best_error = probe_start;

@@ -68,10 +68,10 @@
 namespace lcp_contact_solver::core {
 namespace {
 
-// Warm start: nlgs sweeps until this residual (or the tolerance, if larger) or this
-// many sweeps.
+// Warm start: nlgs sweeps until this residual (or the tolerance, if larger) or
+// kNewtonWarmupSweeps sweeps (kernels.h).
 constexpr double kWarmupTolerance = 1e-3;
-constexpr int kWarmupSweeps = 20;
+constexpr int kWarmupSweeps = kNewtonWarmupSweeps;
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxLineSearch = 30;
 constexpr double kRegularizationMin = 1e-8;
@@ -383,7 +383,9 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   // Warm start: a few nlgs sweeps find the contact states cheaply.
   SolverParams warm_params = params;
   warm_params.tolerance = std::max(params.tolerance, kWarmupTolerance);
-  warm_params.maxIt = std::min(params.maxIt, kWarmupSweeps);
+  // Sweeps the caller ran already (auto's probe) are not run twice.
+  const int warm_left = std::max(0, kWarmupSweeps - ctx.warmup_sweeps_done);
+  warm_params.maxIt = std::min(params.maxIt, warm_left);
   warm_params.stopping_rule = StoppingRule::kResidual;
   SolveContext warm_ctx = ctx;
   warm_ctx.params = &warm_params;
@@ -395,7 +397,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   // known here without forming its blocks (the body form stores no W: nlgs finds out itself).
   if (!problem.bodies && !ctx.positiveDiagonal(/*bilateral=*/false))
     warm.status = SolveStatus::kZeroDiagonal;  // as nlgs would say, without its set-up
-  else
+  else if (warm_left > 0)
     warm = runNonlinearGaussSeidel(warm_ctx, lambda);
   int warm_sweeps = 0;
   if (warm.status == SolveStatus::kZeroDiagonal || !lambda.allFinite()) {
@@ -449,7 +451,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   int sweeps = warm_sweeps;
   bool nlgs_usable =
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
-  const bool warm_started = start.squaredNorm() > 0.0;
+  const bool warm_started = ctx.warmup_sweeps_done > 0 ? ctx.warmup_start_was_warm : start.squaredNorm() > 0.0;
   std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;

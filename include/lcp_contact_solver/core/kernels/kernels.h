@@ -50,6 +50,11 @@ struct SolveContext {
   // check of λ = 0 on the whole problem); NaN when not known.
   double start_residual = std::numeric_limits<double>::quiet_NaN();
   GaussSeidelMemo* gs_memo = nullptr;  // see above; none: each call forms its own
+  // newton's warm-up sweeps the caller already ran (auto's probe: the same nlgs sweeps from
+  // the solve's start, which was a warm start or not): newton runs only the rest of its
+  // kNewtonWarmupSweeps, and its path is the one it would have taken from that start.
+  int warmup_sweeps_done = 0;
+  bool warmup_start_was_warm = false;
   ApgdMemo* apgd_memo = nullptr;       // see above; none: each call starts afresh
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
@@ -113,7 +118,9 @@ KernelReport runNonlinearGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
 KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Accelerated projected gradient on the Coulomb disc (apgd.cpp).
 KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda);
-// Semismooth Newton on the Alart-Curnier function (newton.cpp).
+// Semismooth Newton on the Alart-Curnier function (newton.cpp), after at most this many nlgs
+// sweeps of warm-up.
+constexpr int kNewtonWarmupSweeps = 20;
 KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Proximal point loop around runNewton on W + σI (prox_newton.cpp).
 KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
