@@ -671,6 +671,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const double probe_start = best_residual;
   double stage_start = best_residual;
   int probe_sweeps = 0;
+  bool warmup_over = false;  // the probe swept through newton's warm-up
   double warmup_residual = std::numeric_limits<double>::infinity();  // work.warmup's
   double warmup_error = 0.0;
   FrictionModel warmup_model = FrictionModel::kCoulombDisc;
@@ -720,6 +721,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     sticking_tried = true;
     const Clock::time_point s0 = Clock::now();
     member_params.maxIt = params.maxIt - used;
+    member_params.tolerance = params.tolerance;  // not the probe's warm-up stage's
     member.params = &member_params;
     member.has_deadline = ctx.has_deadline;
     member.deadline = ctx.deadline;
@@ -782,6 +784,14 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         gs_omega = omega_state == 0 ? 1.0 : std::min(kAutoOmegaMax, 2.0 / (1.0 + std::sqrt(1.0 - plain_rate)));
       }
       member_params.sor = gs_omega;
+    }
+    // The probe's nlgs sweeps are newton's warm-up, whose end (kNewtonWarmupTolerance or
+    // kNewtonWarmupSweeps) a stage stops at, so that its iterate can be kept for newton.
+    const bool warmup_stage = cur.probe && probe_kind == SolverKind::kNlgs && !warmup_over;
+    member_params.tolerance = params.tolerance;
+    if (warmup_stage) {
+      member_params.maxIt = std::min(member_params.maxIt, kNewtonWarmupSweeps - probe_sweeps);
+      member_params.tolerance = std::max(params.tolerance, kNewtonWarmupTolerance);
     }
     member.warmup_sweeps_done = cur.warmup_credit;
     member.warmup_start_was_warm = cur.warmup_credit > 0 && !origin.isZero(0.0);
@@ -877,6 +887,17 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       continue;
     }
     if (cur.probe) {
+      // The stage ended where newton's warm-up would have: its iterate is kept for newton.
+      if (warmup_stage) {
+        warmup_over = probe_sweeps + r.iterations >= kNewtonWarmupSweeps ||
+                      best_residual <= std::max(params.tolerance, kNewtonWarmupTolerance);
+        if (warmup_over && !(best_residual > probe_start) && !failedToRun(r.status)) {
+          work.warmup = best;
+          warmup_residual = best_residual;
+          warmup_error = best_error;
+          warmup_model = best_model;
+        }
+      }
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
       const double needed = r.iterations > 0 && best_residual < stage_start
@@ -901,12 +922,6 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         continue;
       }
       probe_sweeps += r.iterations;
-      if (probe_kind == SolverKind::kNlgs && probe_sweeps == kNewtonWarmupSweeps && !(best_residual > probe_start)) {
-        work.warmup = best;  // newton's warm-up done: where it goes on from if the probe runs past it
-        warmup_residual = best_residual;
-        warmup_error = best_error;
-        warmup_model = best_model;
-      }
       if (r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
         // Twice the sweeps the rate says: Gauss-Seidel's rate only slows as it goes (box stacks).
@@ -917,21 +932,18 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
-          // Before newton a stage ends at its warm-up's last sweep, whose iterate is kept.
-          if (probe_kind == SolverKind::kNlgs && !plan.empty() && plan.front() == SolverKind::kNewton &&
-              probe_sweeps < kNewtonWarmupSweeps && probe_sweeps + cur.slice > kNewtonWarmupSweeps)
-            cur.slice = kNewtonWarmupSweeps - probe_sweeps;
           stage_start = best_residual;
           continue;
         }
       }
-      // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate,
-      // and so does newton if the probe was no longer than its own warm-up: nlgs sweeps from
-      // the start are that warm-up, which then runs only the rest of its sweeps (newton's path
-      // is the one it takes alone; with 20 more sweeps after 3 of the probe's, a box stack's
-      // Newton steps stalled four times: 1.4x). Any other member starts from the start as it
-      // would have without the probe (apgd from a Gauss-Seidel iterate crawled on the box
-      // pyramids: 80×; newton from 35 sweeps on a box stack stalled twice and restarted: 3.5×).
+      // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate.
+      // newton too: nlgs sweeps from the start are its own warm-up, so it goes on from where
+      // that warm-up ended (the probe's stage stopped there) or, for a probe shorter than the
+      // warm-up, from the probe's iterate with the rest of the warm-up to run; either way its
+      // steps are those it takes alone (with its whole warm-up again after 3 of the probe's
+      // sweeps, a box stack's Newton steps stalled four times: 1.4×; from 35 sweeps, twice and
+      // restarted: 3.5×). Any other member starts from the start as it would have without the
+      // probe (apgd from a Gauss-Seidel iterate crawled on the box pyramids: 80×).
       startPlan();
       m = 0;
       const SolverKind first = planned().front();  // the scout starts from the start anyway
@@ -941,18 +953,18 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           first == SolverKind::kNlgs || first == SolverKind::kPgs ||
           (first == SolverKind::kNewton && probe_sweeps <= (warmup ? kNewtonWarmupSweeps : kAutoProbeSweeps) &&
            !(best_residual > probe_start));
-      // A probe that ran past newton's warm-up hands newton the iterate at its end.
-      const bool past_warmup = warmup && first == SolverKind::kNewton && !keep && std::isfinite(warmup_residual);
-      if (past_warmup) {
+      // A probe that ran through newton's warm-up hands newton the iterate at its end.
+      const bool warmup_done = warmup && first == SolverKind::kNewton && std::isfinite(warmup_residual);
+      if (warmup_done) {
         best = work.warmup;
         best_residual = warmup_residual;
         best_error = warmup_error;
         best_model = warmup_model;
       }
-      if ((keep || past_warmup) && warmup && first == SolverKind::kNewton)
+      if ((keep || warmup_done) && warmup && first == SolverKind::kNewton)
         for (PortfolioMember& mem : members)
-          if (mem.kind == SolverKind::kNewton) mem.warmup_credit = std::min(probe_sweeps, kNewtonWarmupSweeps);
-      if (!keep && !past_warmup) {
+          if (mem.kind == SolverKind::kNewton) mem.warmup_credit = warmup_done ? kNewtonWarmupSweeps : probe_sweeps;
+      if (!keep && !warmup_done) {
         best = origin;
         best_residual = probe_start;
         best_error = probe_start;

@@ -414,8 +414,9 @@ TEST(Portfolio, AnApgdScoutGoesBeforeNewtonOnMultiPointContacts) {
 }
 
 // newton after the probe: the probe's nlgs sweeps from the start are newton's own warm-up
-// (up to kNewtonWarmupSweeps of them), which then runs only the rest, so the Newton steps that
-// follow are those newton takes alone. Before, newton swept its whole warm-up again from the
+// (until kNewtonWarmupTolerance or kNewtonWarmupSweeps), which then runs only the rest, and a
+// probe that goes on past the warm-up's end hands newton the iterate there, so the Newton
+// steps that follow are those newton takes alone. Before, newton swept its whole warm-up again from the
 // probe's iterate and took other steps (on a box stack at 1e-8: four that stalled, 1.4x the
 // time). Checked on the steps' residuals (the histories' tails), on the forces, and on
 // Coulomb's law from the forces.
@@ -428,6 +429,8 @@ TEST(Portfolio, NewtonAfterTheProbeTakesItsOwnSteps) {
   const Case cases[] = {
       {solvers_test::randomFrictionalProblem(20, 7, 0.5, 1e-3), 1e-8, "20 coupled contacts, seed 7"},
       {solvers_test::randomFrictionalProblem(20, 8, 0.5, 1e-3), 1e-8, "20 coupled contacts, seed 8"},
+      // newton's warm-up ends at 1e-3 after a few sweeps; the probe goes on past it
+      {solvers_test::randomFrictionalProblem(20, 5, 0.5, 1e-3), 1e-8, "20 coupled contacts, seed 5"},
       {boxStack(3, 4, 1.0, 0.5, 0.8), 1e-6, "3 boxes (an apgd scout before newton)"},
       {boxStack(6, 4, 1.0, 0.5, 0.8), 1e-6, "6 boxes (an apgd scout before newton)"},
   };
@@ -442,10 +445,9 @@ TEST(Portfolio, NewtonAfterTheProbeTakesItsOwnSteps) {
     EXPECT_LE(recomputedResidual(c.p, r), c.tol) << c.what;
     const std::string path = afterScout(r);
     ASSERT_EQ(path, "auto:newton") << c.what << ": " << r.solver;
-    if (afterProbe(r) == "auto:newton") EXPECT_EQ(r.iterations, newton.iterations) << c.what;  // no scout
-    ASSERT_GE(newton.residual_history.size(), 3u);
-    ASSERT_GE(r.residual_history.size(), 3u);
-    for (std::size_t k = 1; k <= 3; ++k) {
+    ASSERT_GE(newton.residual_history.size(), 2u);
+    ASSERT_GE(r.residual_history.size(), 2u);
+    for (std::size_t k = 1; k <= 2; ++k) {  // newton's start and one step at least
       const double own = newton.residual_history[newton.residual_history.size() - k];
       const double in_auto = r.residual_history[r.residual_history.size() - k];
       // 1e-3: the round-off of sweeping in the probe's stages instead of one run

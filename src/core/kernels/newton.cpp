@@ -68,9 +68,9 @@
 namespace lcp_contact_solver::core {
 namespace {
 
-// Warm start: nlgs sweeps until this residual (or the tolerance, if larger) or
+// Warm start: nlgs sweeps until kNewtonWarmupTolerance (or the tolerance, if larger) or
 // kNewtonWarmupSweeps sweeps (kernels.h).
-constexpr double kWarmupTolerance = 1e-3;
+constexpr double kWarmupTolerance = kNewtonWarmupTolerance;
 constexpr int kWarmupSweeps = kNewtonWarmupSweeps;
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxLineSearch = 30;

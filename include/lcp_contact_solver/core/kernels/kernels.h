@@ -51,8 +51,8 @@ struct SolveContext {
   double start_residual = std::numeric_limits<double>::quiet_NaN();
   GaussSeidelMemo* gs_memo = nullptr;  // see above; none: each call forms its own
   // newton's warm-up sweeps the caller already ran (auto's probe: the same nlgs sweeps from
-  // the solve's start, which was a warm start or not): newton runs only the rest of its
-  // kNewtonWarmupSweeps, and its path is the one it would have taken from that start.
+  // the solve's start, which was a warm start or not): newton runs only the rest of them
+  // (none from kNewtonWarmupSweeps on), and its path is the one it takes from that start.
   int warmup_sweeps_done = 0;
   bool warmup_start_was_warm = false;
   ApgdMemo* apgd_memo = nullptr;       // see above; none: each call starts afresh
@@ -118,8 +118,9 @@ KernelReport runNonlinearGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
 KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Accelerated projected gradient on the Coulomb disc (apgd.cpp).
 KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda);
-// Semismooth Newton on the Alart-Curnier function (newton.cpp), after at most this many nlgs
-// sweeps of warm-up.
+// Semismooth Newton on the Alart-Curnier function (newton.cpp), after a warm-up of nlgs sweeps
+// that ends at this residual (or the tolerance, if larger) or after this many sweeps.
+constexpr double kNewtonWarmupTolerance = 1e-3;
 constexpr int kNewtonWarmupSweeps = 20;
 KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // Proximal point loop around runNewton on W + σI (prox_newton.cpp).
