@@ -961,7 +961,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         best_error = warmup_error;
         best_model = warmup_model;
       }
-      if ((keep || warmup_done) && warmup && first == SolverKind::kNewton)
+      if (warmup && first == SolverKind::kNewton && (keep || warmup_done))
         for (PortfolioMember& mem : members)
           if (mem.kind == SolverKind::kNewton) mem.warmup_credit = warmup_done ? kNewtonWarmupSweeps : probe_sweeps;
       if (!keep && !warmup_done) {

@@ -69,9 +69,7 @@ namespace lcp_contact_solver::core {
 namespace {
 
 // Warm start: nlgs sweeps until kNewtonWarmupTolerance (or the tolerance, if larger) or
-// kNewtonWarmupSweeps sweeps (kernels.h).
-constexpr double kWarmupTolerance = kNewtonWarmupTolerance;
-constexpr int kWarmupSweeps = kNewtonWarmupSweeps;
+// kNewtonWarmupSweeps sweeps (kernels.h: auto's probe stops at the same point).
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxLineSearch = 30;
 constexpr double kRegularizationMin = 1e-8;
@@ -382,9 +380,9 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   // Warm start: a few nlgs sweeps find the contact states cheaply.
   SolverParams warm_params = params;
-  warm_params.tolerance = std::max(params.tolerance, kWarmupTolerance);
+  warm_params.tolerance = std::max(params.tolerance, kNewtonWarmupTolerance);
   // Sweeps the caller ran already (auto's probe) are not run twice.
-  const int warm_left = std::max(0, kWarmupSweeps - ctx.warmup_sweeps_done);
+  const int warm_left = std::max(0, kNewtonWarmupSweeps - ctx.warmup_sweeps_done);
   warm_params.maxIt = std::min(params.maxIt, warm_left);
   warm_params.stopping_rule = StoppingRule::kResidual;
   SolveContext warm_ctx = ctx;
@@ -542,7 +540,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         // the same warm-up sweeps as the start did.
         lambda.setZero();
         if (nlgs_usable) {
-          warm_params.maxIt = std::min(kWarmupSweeps, params.maxIt - newton_steps - sweeps);
+          warm_params.maxIt = std::min(kNewtonWarmupSweeps, params.maxIt - newton_steps - sweeps);
           sweeps += runNonlinearGaussSeidel(warm_ctx, lambda).iterations;
           if (!lambda.allFinite()) lambda.setZero();
         }
