@@ -793,6 +793,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       member_params.maxIt = std::min(member_params.maxIt, kNewtonWarmupSweeps - probe_sweeps);
       member_params.tolerance = std::max(params.tolerance, kNewtonWarmupTolerance);
     }
+    // x's residual when x is the best iterate (newton's own first check of it is then free).
+    const bool from_best = !from_origin && !(cur.scout && scout.iterations > 0);
+    member.start_residual = by_residual && from_best ? best_residual : std::numeric_limits<double>::quiet_NaN();
     member.warmup_sweeps_done = cur.warmup_credit;
     member.warmup_start_was_warm = cur.warmup_credit > 0 && !origin.isZero(0.0);
     cur.warmup_credit = 0;

@@ -210,5 +210,45 @@ TEST(TimeBudget, ZeroMeansNoBudget) {
   EXPECT_EQ(solveProblem(p, params).status, SolveStatus::kConverged);
 }
 
+// ---- newton's linear solves -------------------------------------------------------------
+
+// A monotone, non-symmetric LCP (M = skew-symmetric + a PSD diagonal that is zero on every
+// other row) with a known solution: nlgs cannot start on a zero diagonal and the symmetric
+// active-set path does not apply, so every iteration is a Newton step of the general path,
+// whose (J + εI) Δ = -Φ is solved by plain loops up to 32 rows and by Eigen's LU above. A
+// wrong solve (a permutation applied out of order, say) leaves the line search without a
+// descent direction and the solve crawls on damped steps to maxIt.
+Problem monotoneSkewLcp(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) {
+      M(i, j) = u(rng);
+      M(j, i) = -M(i, j);
+    }
+  for (int i = 0; i < n; i += 2) M(i, i) = 1.0 + std::abs(u(rng));
+  Eigen::VectorXd lambda(n), w(n);
+  for (int i = 0; i < n; ++i) {
+    const bool active = i % 3 != 0;
+    lambda(i) = active ? 0.5 + std::abs(u(rng)) : 0.0;
+    w(i) = active ? 0.0 : 0.5 + std::abs(u(rng));
+  }
+  return makeLcpProblem(M, w - M * lambda);
+}
+
+TEST(Newton, StepsSolveTheLinearisationOnSmallAndLargeSystems) {
+  for (int n : {5, 8, 24, 32, 33, 48}) {
+    SCOPED_TRACE(n);
+    const Problem p = monotoneSkewLcp(n, 300u + static_cast<unsigned>(n));
+    SolverParams params = tight(SolverKind::kNewton, 1e-12);
+    params.maxIt = 60;
+    const SolveResult r = solveProblem(p, params);
+    EXPECT_EQ(r.status, SolveStatus::kConverged) << r.message;
+    EXPECT_LE(r.residual, 1e-12);
+    expectFinite(r);
+  }
+}
+
 }  // namespace
 }  // namespace lcp_contact_solver::core

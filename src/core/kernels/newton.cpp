@@ -52,6 +52,7 @@
 #include "lcp_contact_solver/core/residual.h"
 #include "local_contact_laws.h"
 #include "newton_symmetric.h"
+#include "thread_workspace.h"
 
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
@@ -111,45 +112,47 @@ struct JacobianBlocks {
   double B[36];
 };
 
-std::vector<NewtonContact> newtonContacts(const SolveContext& ctx) {
+void newtonContacts(const SolveContext& ctx, std::vector<NewtonContact>& contacts) {
   const Problem& problem = *ctx.problem;
-  std::vector<NewtonContact> contacts(problem.contacts.size());
-  // Fallback weight for a non-positive diagonal: the largest diagonal of W.
+  contacts.assign(problem.contacts.size(), NewtonContact{});
+  // First the weights' diagonals (each contact's block read once), then their inverses with
+  // a fallback for a non-positive one: the largest diagonal of W.
   double fallback = 0.0;
-  for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-    const ContactBlock D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));
-    fallback = std::max(fallback, D.diagonal().maxCoeff() + ctx.regularization);
-  }
-  const double rho_fallback = fallback > 0.0 ? 1.0 / fallback : 1.0;
-  auto inverse = [&](double w) { return w > 0.0 ? 1.0 / w : rho_fallback; };
   for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
     const Contact& c = problem.contacts[i];
     NewtonContact& nc = contacts[i];
     nc.offset = ctx.offsets[i];
     nc.rows = c.rows;
     nc.mu = ctx.mu[i];
-    if (ctx.ignored[i]) continue;  // kIdentity: Φ = λ keeps the force at zero
     ContactBlock D = contactDiagonalBlock(problem, ctx.offsets, static_cast<int>(i));
     D.diagonal().array() += ctx.regularization;
+    fallback = std::max(fallback, D.diagonal().maxCoeff());
+    if (ctx.ignored[i]) continue;  // kIdentity: Φ = λ keeps the force at zero
     switch (c.type) {
       case ContactType::kBilateral:
         nc.kind = RowKind::kBilateral;
-        nc.rho_n = inverse(D.diagonal().maxCoeff());
+        nc.rho_n = D.diagonal().maxCoeff();
         break;
       case ContactType::kFrictionless:
         nc.kind = RowKind::kNormal;
-        nc.rho_n = inverse(D(0, 0));
+        nc.rho_n = D(0, 0);
         break;
       case ContactType::kFrictional:
         nc.kind = nc.mu > 0.0 ? RowKind::kFrictional : RowKind::kFrictionalNormalOnly;
-        nc.rho_n = inverse(D(0, 0));
-        nc.rho_t = inverse(0.5 * (D(1, 1) + D(2, 2)));
+        nc.rho_n = D(0, 0);
+        nc.rho_t = 0.5 * (D(1, 1) + D(2, 2));
         break;
       case ContactType::kTorsional:  // refused before any kernel runs (contact_solver.cpp)
       case ContactType::kRolling: break;
     }
   }
-  return contacts;
+  const double rho_fallback = fallback > 0.0 ? 1.0 / fallback : 1.0;
+  auto inverse = [&](double w) { return w > 0.0 ? 1.0 / w : rho_fallback; };
+  for (NewtonContact& nc : contacts) {
+    if (nc.kind == RowKind::kIdentity) continue;
+    nc.rho_n = inverse(nc.rho_n);
+    if (nc.kind == RowKind::kFrictional || nc.kind == RowKind::kFrictionalNormalOnly) nc.rho_t = inverse(nc.rho_t);
+  }
 }
 
 // Φ of one contact from λ_c, u_c; with `blocks`, also its Jacobian blocks.
@@ -249,30 +252,103 @@ class NewtonSystem {
 
 class DenseSystem : public NewtonSystem {
  public:
-  DenseSystem(const Eigen::MatrixXd& W, double regularization)
-      : W_(W), J_(W.rows(), W.cols()), lu_(static_cast<int>(W.rows())) {
+  // Sized for W (storage kept from the last problem when it fits).
+  void reset(const Eigen::MatrixXd& W, double regularization) {
+    W_ = W;
     W_.diagonal().array() += regularization;
+    J_.resize(W.rows(), W.cols());
   }
   bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
                  double epsilon) override {
+    // J's rows of a contact: B_c times W's rows of it, plus A_c on the diagonal block. Plain
+    // loops: a GEMM call per contact cost more than the product on one- and three-row blocks.
+    const Eigen::Index n = W_.rows();
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       const NewtonContact& nc = contacts[i];
-      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> A(
-          blocks[i].A, nc.rows, nc.rows),
-          B(blocks[i].B, nc.rows, nc.rows);
-      J_.middleRows(nc.offset, nc.rows).noalias() = B * W_.middleRows(nc.offset, nc.rows);
-      J_.block(nc.offset, nc.offset, nc.rows, nc.rows) += A;
+      const int m = nc.rows;
+      const double* B = blocks[i].B;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double* w = W_.col(j).data() + nc.offset;  // W's column j on the contact's rows
+        double* out = J_.col(j).data() + nc.offset;
+        for (int r = 0; r < m; ++r) {
+          double sum = 0.0;
+          for (int k = 0; k < m; ++k) sum += B[r * m + k] * w[k];
+          out[r] = sum;
+        }
+      }
+      const double* A = blocks[i].A;
+      for (int r = 0; r < m; ++r)
+        for (int c = 0; c < m; ++c) J_(nc.offset + r, nc.offset + c) += A[r * m + c];
     }
     J_.diagonal().array() += epsilon;
-    lu_.compute(J_);
+    small_ = n <= kSmallLuRows;
+    if (small_)
+      factorSmall();
+    else
+      lu_.compute(J_);
     return true;
   }
-  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override { x = lu_.solve(rhs); }
+  void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
+    if (small_)
+      solveSmall(rhs, x);
+    else
+      x = lu_.solve(rhs);
+  }
 
  private:
+  // Up to this size J is factorised by the plain loops below: on a 4-row system Eigen's
+  // blocked LU spent more on its set-up than on the arithmetic.
+  static constexpr int kSmallLuRows = 32;
+
+  // LU with partial pivoting in place on J (column-major, right-looking): the unit lower
+  // factor below the diagonal, the upper one on and above it, row swaps in pivots_. A zero
+  // pivot column is left as it is (as Eigen does): the solve then yields a non-finite Δ,
+  // which the caller rejects.
+  void factorSmall() {
+    const int n = static_cast<int>(J_.rows());
+    pivots_.resize(n);
+    double* a = J_.data();
+    for (int k = 0; k < n; ++k) {
+      int p = k;
+      double biggest = std::abs(a[k + k * n]);
+      for (int i = k + 1; i < n; ++i) {
+        if (std::abs(a[i + k * n]) > biggest) {
+          biggest = std::abs(a[i + k * n]);
+          p = i;
+        }
+      }
+      pivots_[k] = p;
+      if (biggest == 0.0) continue;
+      if (p != k)
+        for (int j = 0; j < n; ++j) std::swap(a[k + j * n], a[p + j * n]);
+      const double inverse = 1.0 / a[k + k * n];
+      for (int i = k + 1; i < n; ++i) a[i + k * n] *= inverse;
+      for (int j = k + 1; j < n; ++j) {
+        const double f = a[k + j * n];
+        if (f == 0.0) continue;
+        for (int i = k + 1; i < n; ++i) a[i + j * n] -= a[i + k * n] * f;
+      }
+    }
+  }
+  void solveSmall(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
+    const int n = static_cast<int>(J_.rows());
+    const double* a = J_.data();
+    x = rhs;
+    // The swaps moved whole rows (L's columns too): all of them first, as LAPACK's getrs.
+    for (int k = 0; k < n; ++k) std::swap(x[k], x[pivots_[k]]);
+    for (int k = 0; k < n; ++k)
+      for (int i = k + 1; i < n; ++i) x[i] -= a[i + k * n] * x[k];
+    for (int k = n - 1; k >= 0; --k) {
+      x[k] /= a[k + k * n];
+      for (int i = 0; i < k; ++i) x[i] -= a[i + k * n] * x[k];
+    }
+  }
+
   Eigen::MatrixXd W_;
   Eigen::MatrixXd J_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+  std::vector<int> pivots_;
+  bool small_ = false;
 };
 
 class SparseSystem : public NewtonSystem {
@@ -353,6 +429,18 @@ class SparseSystem : public NewtonSystem {
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
 };
 
+// Everything one solve allocates (thread_workspace.h).
+struct NewtonWorkspace {
+  SolveContext warm_ctx, burst_ctx;
+  GaussSeidelMemo memo;  // the warm-up's blocks serve every burst
+  Eigen::VectorXd start, best, u, phi, rhs, delta, w_delta, trial, u_trial, phi_trial;
+  std::vector<NewtonContact> contacts;
+  std::vector<JacobianBlocks> blocks;
+  DenseSystem dense;
+  std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
+};
+constexpr int kKeptWorkspaceRows = 64;
+
 }  // namespace
 
 KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
@@ -371,7 +459,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   // Already solved (a warm start from the previous answer): nothing to do.
   {
-    const double residual = ctx.residual(lambda);
+    const double residual = std::isnan(ctx.start_residual) ? ctx.residual(lambda) : ctx.start_residual;
     if (residual <= params.tolerance) {
       report.status = SolveStatus::kConverged;
       report.solver_error = residual;
@@ -385,11 +473,17 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const int warm_left = std::max(0, kNewtonWarmupSweeps - ctx.warmup_sweeps_done);
   warm_params.maxIt = std::min(params.maxIt, warm_left);
   warm_params.stopping_rule = StoppingRule::kResidual;
-  SolveContext warm_ctx = ctx;
+  const WorkspaceLease<NewtonWorkspace> lease(n, kKeptWorkspaceRows);
+  NewtonWorkspace& ws = *lease;
+  SolveContext& warm_ctx = ws.warm_ctx;
+  warm_ctx = ctx;
   warm_ctx.params = &warm_params;
-  GaussSeidelMemo own_memo;  // the warm-up's blocks serve every burst
-  if (warm_ctx.gs_memo == nullptr) warm_ctx.gs_memo = &own_memo;
-  const Eigen::VectorXd start = lambda;
+  if (warm_ctx.gs_memo == nullptr) {
+    ws.memo.clear();  // a kept memo may describe another problem at the same address
+    warm_ctx.gs_memo = &ws.memo;
+  }
+  Eigen::VectorXd& start = ws.start;
+  start = lambda;
   KernelReport warm;
   // nlgs would stop at once with zero_diagonal where a non-bilateral contact has W_nn + r <= 0:
   // known here without forming its blocks (the body form stores no W: nlgs finds out itself).
@@ -428,21 +522,28 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
   }
 
-  const std::vector<NewtonContact> contacts = newtonContacts(ctx);
-  std::vector<JacobianBlocks> blocks(contacts.size());
-  std::unique_ptr<NewtonSystem> system;
+  std::vector<NewtonContact>& contacts = ws.contacts;
+  newtonContacts(ctx, contacts);
+  std::vector<JacobianBlocks>& blocks = ws.blocks;
+  blocks.resize(contacts.size());
+  std::unique_ptr<SparseSystem> sparse;
+  NewtonSystem* system = &ws.dense;
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
-    system = std::make_unique<DenseSystem>(*dense, ctx.regularization);
+    ws.dense.reset(*dense, ctx.regularization);
   } else {
-    system = std::make_unique<SparseSystem>(std::get<BlockSparseMatrix>(problem.W), ctx.regularization);
+    sparse = std::make_unique<SparseSystem>(std::get<BlockSparseMatrix>(problem.W), ctx.regularization);
+    system = sparse.get();
   }
 
-  Eigen::VectorXd u(n), phi(n), rhs(n), delta(n), w_delta(n), trial(n), u_trial(n), phi_trial(n);
+  Eigen::VectorXd &u = ws.u, &phi = ws.phi, &rhs = ws.rhs, &delta = ws.delta, &w_delta = ws.w_delta,
+                  &trial = ws.trial, &u_trial = ws.u_trial, &phi_trial = ws.phi_trial;
+  for (Eigen::VectorXd* v : {&u, &phi, &rhs, &delta, &w_delta, &trial, &u_trial, &phi_trial}) v->resize(n);
   auto applyW = [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) {
     multiply(problem.W, x, y);
     if (ctx.regularization != 0.0) y += ctx.regularization * x;
   };
-  Eigen::VectorXd best = lambda;
+  Eigen::VectorXd& best = ws.best;
+  best = lambda;
   double best_residual = std::numeric_limits<double>::infinity();
   double c_reg = kRegularizationStart;
   int newton_steps = 0;
@@ -450,15 +551,18 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   bool nlgs_usable =
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
   const bool warm_started = ctx.warmup_sweeps_done > 0 ? ctx.warmup_start_was_warm : start.squaredNorm() > 0.0;
-  std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
+  std::vector<double>& best_at_stall = ws.best_at_stall;  // the best residual at each stall
+  best_at_stall.clear();
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   double previous_residual = std::numeric_limits<double>::infinity();
+  double converged_residual = 0.0;  // the last iterate's, when it met the tolerance
   int stagnant_steps = 0;
   bool stagnation_burst_tried = false;
   double previous_epsilon = kRegularizationMax;
   SolverParams burst_params = warm_params;
-  SolveContext burst_ctx = warm_ctx;
+  SolveContext& burst_ctx = ws.burst_ctx;
+  burst_ctx = warm_ctx;
   burst_ctx.params = &burst_params;
   report.status = SolveStatus::kMaxIterations;
   double burst_residual = std::numeric_limits<double>::infinity();  // the last burst's
@@ -493,6 +597,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (residual <= params.tolerance) {
       report.status = SolveStatus::kConverged;
+      converged_residual = residual;
       break;
     }
     if (newton_steps + sweeps >= params.maxIt) {
@@ -610,12 +715,16 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       c_reg = std::max(c_reg * 0.1, kRegularizationMin);
     }
   }
-  if (!lambda.allFinite() || report.status != SolveStatus::kConverged) lambda = best;
+  // The loop measured whichever iterate is returned (with u = W λ + d_free kept alongside).
+  const bool converged = report.status == SolveStatus::kConverged;
+  if (!converged) lambda = best;
   report.iterations = symmetric_steps + stick_steps + sweeps + newton_steps;
   if (report.message.empty())
     report.message =
         std::to_string(sweeps) + " nlgs sweeps + " + std::to_string(newton_steps) + " Newton steps";
-  report.solver_error = ctx.residual(lambda);
+  report.solver_error = converged                      ? converged_residual
+                        : std::isfinite(best_residual) ? best_residual
+                                                       : ctx.residual(lambda);
   return report;
 }
 

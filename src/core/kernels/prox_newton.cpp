@@ -92,6 +92,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   inner.problem = &sub;
   inner.params = &inner_params;
   inner.gs_memo = nullptr;  // r + σ changes at every proximal step: nothing to keep
+  inner.start_residual = std::numeric_limits<double>::quiet_NaN();  // each subproblem is another
 
   const double scale = meanDiagonal(problem, ctx.regularization);
   double sigma = kSigmaStart * scale;
