@@ -1,10 +1,12 @@
 // Lexicographic Lemke pivoting for the frictionless part of the contact problem.
 #include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
+#include "thread_workspace.h"
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -51,10 +53,9 @@ struct LcpData {
   Eigen::VectorXd q;
 };
 
-LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
+void buildLcp(const SolveContext& ctx, const std::vector<int>& offsets, LcpData& lcp) {
   const Problem& problem = *ctx.problem;
-  LcpData lcp;
-  lcp.variables.reserve(static_cast<std::size_t>(problem.rowCount()));
+  lcp.variables.clear();
   for (std::size_t c = 0; c < problem.contacts.size(); ++c) {
     if (!ctx.ignored.empty() && ctx.ignored[c]) continue;
     const Contact& contact = problem.contacts[c];
@@ -90,7 +91,6 @@ LcpData buildLcp(const SolveContext& ctx, const std::vector<int>& offsets) {
     }
     lcp.q(j) = vj.sign * problem.d_free(vj.row);
   }
-  return lcp;
 }
 
 // The contact with friction that makes the problem no LCP, or -1.
@@ -110,13 +110,14 @@ int firstFrictionalContact(const SolveContext& ctx, const std::vector<double>& m
 // w_k = k, z_k = n + k, z0 = 2n.
 class LemkeTableau {
  public:
-  explicit LemkeTableau(const LcpData& lcp)
-      : lcp_(lcp),
-        n_(static_cast<int>(lcp.q.size())),
-        inverse_(RowMajorMatrix::Identity(n_, n_)),
-        values_(lcp.q),
-        basis_(n_) {
-    for (int i = 0; i < n_; ++i) basis_[i] = i;  // all w basic
+  // The start: every w basic (storage kept from the last problem when it fits).
+  void reset(const LcpData& lcp) {
+    lcp_ = &lcp;
+    n_ = static_cast<int>(lcp.q.size());
+    inverse_.setIdentity(n_, n_);
+    values_ = lcp.q;
+    basis_.resize(n_);
+    for (int i = 0; i < n_; ++i) basis_[i] = i;
   }
 
   int size() const { return n_; }
@@ -133,8 +134,8 @@ class LemkeTableau {
       return 1.0;
     }
     if (variable < 2 * n_) {
-      column.noalias() = -(inverse_ * lcp_.M.col(variable - n_));
-      return lcp_.M.col(variable - n_).cwiseAbs().maxCoeff();
+      column.noalias() = -(inverse_ * lcp_->M.col(variable - n_));
+      return lcp_->M.col(variable - n_).cwiseAbs().maxCoeff();
     }
     column = -inverse_.rowwise().sum();
     return 1.0;
@@ -146,7 +147,7 @@ class LemkeTableau {
   int initialRow() const {
     int row = 0;
     for (int i = 1; i < n_; ++i) {
-      if (lcp_.q[i] <= lcp_.q[row]) row = i;
+      if (lcp_->q[i] <= lcp_->q[row]) row = i;
     }
     return row;
   }
@@ -157,7 +158,7 @@ class LemkeTableau {
     const double column_scale = column.cwiseAbs().maxCoeff();
     if (!(column_scale > 0.0)) return -1;
     const double pivot_floor = kPivotTolerance * column_scale;
-    const double q_scale = lcp_.q.cwiseAbs().maxCoeff();
+    const double q_scale = lcp_->q.cwiseAbs().maxCoeff();
     const double value_floor = kRoundoffTolerance * std::max(values_.cwiseAbs().maxCoeff(), q_scale);
 
     // Candidates: rows whose entry is positive beyond rounding. Row i of B⁻¹ produces both
@@ -238,13 +239,13 @@ class LemkeTableau {
     Eigen::VectorXd x = values_;
     Eigen::VectorXd defect(n_);
     for (int round = 0; round < kRefinementRounds; ++round) {
-      defect = lcp_.q;
+      defect = lcp_->q;
       for (int i = 0; i < n_; ++i) {
         const int variable = basis_[i];
         if (variable < n_) {
           defect[variable] -= x[i];
         } else if (variable < 2 * n_) {
-          defect.noalias() += lcp_.M.col(variable - n_) * x[i];
+          defect.noalias() += lcp_->M.col(variable - n_) * x[i];
         } else {
           defect.array() += x[i];
         }
@@ -256,16 +257,16 @@ class LemkeTableau {
 
   // The z part of the basic solution (`basis`, `values`) as full-length forces, z clipped
   // to ≥ 0.
-  Eigen::VectorXd forces(const std::vector<int>& basis, const Eigen::VectorXd& values, int row_count) const {
-    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(row_count);
+  void forces(const std::vector<int>& basis, const Eigen::VectorXd& values, int row_count,
+              Eigen::VectorXd& lambda) const {
+    lambda.setZero(row_count);
     for (int i = 0; i < n_; ++i) {
       const int variable = basis[i];
       if (variable < n_ || variable >= 2 * n_) continue;
-      const LcpVariable& v = lcp_.variables[variable - n_];
+      const LcpVariable& v = lcp_->variables[variable - n_];
       const double z = std::isfinite(values[i]) ? std::max(values[i], 0.0) : 0.0;
       lambda[v.row] += v.sign * z;
     }
-    return lambda;
   }
 
   double z0Value() const {
@@ -276,8 +277,8 @@ class LemkeTableau {
   }
 
  private:
-  const LcpData& lcp_;
-  int n_;
+  const LcpData* lcp_ = nullptr;
+  int n_ = 0;
   RowMajorMatrix inverse_;  // B⁻¹, row-major: a pivot updates whole rows
   Eigen::VectorXd values_;  // B⁻¹ q, the basic variables' values
   std::vector<int> basis_;  // basic variable of each row
@@ -293,6 +294,15 @@ class LemkeTableau {
   mutable std::vector<Candidate> candidates_;
   mutable std::vector<Candidate> ties_;
 };
+
+// Everything one solve allocates (thread_workspace.h).
+struct LemkeWorkspace {
+  LcpData lcp;
+  LemkeTableau tableau;
+  Eigen::VectorXd column, saved_values, refined;
+  std::vector<int> saved_basis;
+};
+constexpr int kKeptWorkspaceRows = 64;
 
 }  // namespace
 
@@ -376,7 +386,10 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  const LcpData lcp = buildLcp(ctx, offsets);
+  const WorkspaceLease<LemkeWorkspace> lease(row_count, kKeptWorkspaceRows);
+  LemkeWorkspace& ws = *lease;
+  LcpData& lcp = ws.lcp;
+  buildLcp(ctx, offsets, lcp);
   const int n = static_cast<int>(lcp.q.size());
   if (!lcp.q.allFinite() || !lcp.M.allFinite()) {
     lambda = Eigen::VectorXd::Zero(row_count);
@@ -394,12 +407,14 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  LemkeTableau tableau(lcp);
+  LemkeTableau& tableau = ws.tableau;
+  tableau.reset(lcp);
   const bool record = params.displayDebug;
   const int pivot_cap = params.maxIt;
-  Eigen::VectorXd column(n);
-  Eigen::VectorXd saved_values(n);
-  std::vector<int> saved_basis;
+  Eigen::VectorXd& column = ws.column;
+  Eigen::VectorXd& saved_values = ws.saved_values;
+  std::vector<int>& saved_basis = ws.saved_basis;
+  column.resize(n);
   int pivots = 0;
   int entering = tableau.z0();
   SolveStatus status = SolveStatus::kMaxIterations;
@@ -436,15 +451,16 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       }
       row = tableau.leavingRow(column, entering_scale);
       if (row < 0) {
-        // snprintf, not a stream: auto's plans on non-monotone LCPs end here routinely.
-        char line[256];
-        std::snprintf(line, sizeof line,
-                      "Lemke ended on a secondary ray after %d pivots (z0 = %g): no solution found; for "
-                      "positive semidefinite M (e.g. frictionless contacts with W + r I) this means the "
-                      "constraints are infeasible",
-                      pivots, tableau.z0Value());
+        // Shortest to_chars, not printf or a stream: auto's plans on non-monotone LCPs end here
+        // routinely, and formatting z0 to a precision cost a one-pivot Lemke a quarter of its time.
+        char z0[32];
+        const auto z0_end = std::to_chars(z0, z0 + sizeof z0, tableau.z0Value()).ptr;
         status = SolveStatus::kRayTermination;
-        message = line;
+        message.reserve(256);
+        message.append("Lemke ended on a secondary ray after ").append(std::to_string(pivots)).append(" pivots (z0 = ");
+        message.append(z0, z0_end).append(
+            "): no solution found; for positive semidefinite M (e.g. frictionless contacts with W + r I) this "
+            "means the constraints are infeasible");
         break;
       }
     }
@@ -453,7 +469,7 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     const int left = tableau.pivot(row, entering, column);
     ++pivots;
     if (!tableau.values().allFinite() || !tableau.rowFinite(row)) {
-      lambda = tableau.forces(saved_basis, saved_values, row_count);
+      tableau.forces(saved_basis, saved_values, row_count, lambda);
       report.status = SolveStatus::kNumericalFailure;
       report.iterations = pivots;
       report.message = "Lemke: pivot " + std::to_string(pivots) + " produced a non-finite value";
@@ -461,7 +477,8 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       return report;
     }
     if (record) {
-      report.history.push_back(ctx.residual(tableau.forces(tableau.basis(), tableau.values(), row_count)));
+      tableau.forces(tableau.basis(), tableau.values(), row_count, ws.refined);
+      report.history.push_back(ctx.residual(ws.refined));
     }
     if (left == tableau.z0()) {
       status = SolveStatus::kConverged;
@@ -470,10 +487,11 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     entering = tableau.complementOf(left);
   }
 
-  lambda = tableau.forces(tableau.basis(), tableau.values(), row_count);
+  tableau.forces(tableau.basis(), tableau.values(), row_count, lambda);
   double residual = ctx.residual(lambda);
   if (status == SolveStatus::kConverged) {
-    const Eigen::VectorXd refined = tableau.forces(tableau.basis(), tableau.refinedValues(), row_count);
+    Eigen::VectorXd& refined = ws.refined;
+    tableau.forces(tableau.basis(), tableau.refinedValues(), row_count, refined);
     const double refined_residual = ctx.residual(refined);
     if (refined_residual < residual) {
       lambda = refined;
