@@ -49,10 +49,13 @@ void ContactSolver::rememberForces(const Problem& problem, const std::vector<int
   // Only the contacts of the latest solve are kept: ids that vanished do not pile up.
   remembered_forces_.assign(lambda.data(), lambda.data() + lambda.size());
   remembered_.clear();
+  remembered_.reserve(problem.contacts.size());
   for (std::size_t i = 0; i < problem.contacts.size(); ++i)
     remembered_.push_back({problem.contacts[i].id, offsets[i], problem.contacts[i].rows});
-  std::stable_sort(remembered_.begin(), remembered_.end(),
-                   [](const RememberedContact& a, const RememberedContact& b) { return a.id < b.id; });
+  // Ids usually arrive in order: the sort (and its buffer) only when they do not.
+  const auto by_id = [](const RememberedContact& a, const RememberedContact& b) { return a.id < b.id; };
+  if (!std::is_sorted(remembered_.begin(), remembered_.end(), by_id))
+    std::stable_sort(remembered_.begin(), remembered_.end(), by_id);
   // A repeated id keeps its last contact, as an assignment by id would.
   std::size_t kept = 0;
   for (std::size_t i = 0; i < remembered_.size(); ++i) {
@@ -263,7 +266,7 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   // contact, so this ends.
   for (;;) {
     zeroInactiveRows(ctx, lambda);
-    const KernelReport pass = islands ? islands->run(ctx, kernel, lambda, threads) : kernel(ctx, lambda);
+    KernelReport pass = islands ? islands->run(ctx, kernel, lambda, threads) : kernel(ctx, lambda);
     ctx.start_residual = std::numeric_limits<double>::quiet_NaN();  // a maxF pass starts elsewhere
     report.status = pass.status;
     report.message = pass.message;
@@ -271,6 +274,10 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
     report.iterations += pass.iterations;
     report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
     report.friction_model = pass.friction_model;
+    if (result.stages.empty()) {
+      result.stages = std::move(pass.stages);  // the first (usually only) pass: no copy
+      pass.stages.clear();
+    }
     for (const auto& stage : pass.stages) {  // auto: consecutive slices of one member are one stage
       if (!result.stages.empty() && result.stages.back().first == stage.first)
         result.stages.back().second += stage.second;

@@ -695,6 +695,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   best = lambda;
 
   std::vector<std::pair<std::string, double>>* stages = &report.stages;
+  stages->reserve(4);  // most paths have one to three stages: one allocation, not two
   double best_error = best_residual;
   FrictionModel best_model = FrictionModel::kCoulombDisc;
   SolveStatus last_failure = SolveStatus::kMaxIterations;
