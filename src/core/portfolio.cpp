@@ -597,6 +597,14 @@ struct PortfolioMember {
   int warmup_credit = 0;  // newton after the probe: the warm-up sweeps the probe ran (its first run only)
 };
 
+// The best iterate with its measures, set aside while a member runs that may be undone.
+struct SavedBest {
+  Eigen::VectorXd x;
+  double residual = std::numeric_limits<double>::infinity();  // infinite: nothing saved
+  double error = 0.0;
+  FrictionModel model = FrictionModel::kCoulombDisc;
+};
+
 // What one solve's portfolio needs besides its report, kept per thread (islands run on a
 // pool) so that a microsecond island pays no allocation for it after the first solve: the
 // members, the member context (its vectors assigned in place) and the iterates.
@@ -604,7 +612,8 @@ struct Workspace {
   std::vector<PortfolioMember> members;
   SolveContext member;
   Eigen::VectorXd best, x, returned_rows;
-  Eigen::VectorXd warmup;  // the probe's iterate after newton's warm-up sweeps
+  SavedBest warmup;        // the probe's iterate after newton's warm-up sweeps
+  SavedBest before_scout;  // what newton starts from if the apgd scout does not end the solve
   GaussSeidelMemo gs_memo;  // the probe's blocks serve every later Gauss-Seidel slice
   ApgdMemo apgd_memo;       // an apgd slice resumes the last one when handed its answer back
 };
@@ -672,9 +681,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   double stage_start = best_residual;
   int probe_sweeps = 0;
   bool warmup_over = false;  // the probe swept through newton's warm-up
-  double warmup_residual = std::numeric_limits<double>::infinity();  // work.warmup's
-  double warmup_error = 0.0;
-  FrictionModel warmup_model = FrictionModel::kCoulombDisc;
+  SavedBest& warmup_best = work.warmup;
+  warmup_best.residual = std::numeric_limits<double>::infinity();
   std::unique_ptr<Problem> assembled;      // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
@@ -706,10 +714,21 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     Eigen::VectorXd x;     // its own last iterate
     int iterations = 0;
     double last_residual = 0.0;  // at the end of its last slice
-    Eigen::VectorXd best;  // the best iterate before it, and its measures
-    double residual = 0.0, error = 0.0;
-    FrictionModel model = FrictionModel::kCoulombDisc;
   } scout;  // the apgd scout's state
+  SavedBest& before_scout = work.before_scout;
+  // Sets the best iterate aside, and puts a saved one back (swapped: the saved copy is spent).
+  auto saveBest = [&](SavedBest& saved) {
+    saved.x = best;
+    saved.residual = best_residual;
+    saved.error = best_error;
+    saved.model = best_model;
+  };
+  auto restoreBest = [&](SavedBest& saved) {
+    best.swap(saved.x);
+    best_residual = saved.residual;
+    best_error = saved.error;
+    best_model = saved.model;
+  };
   // Gauss-Seidel's over-relaxation (kAutoOmegaTrial): a user's own sor is kept as it is.
   const bool adapt_omega = params.sor == 1.0;
   double plain_rate = 0.0;  // residual factor per plain sweep, measured in the first window
@@ -769,12 +788,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       x = from_origin ? origin : best;  // the scout from the start: apgd crawls from a Gauss-Seidel iterate
       if (from_origin) projectFeasible(ctx, x);
     }
-    if (cur.scout && scout.iterations == 0) {  // what newton starts from if the scout does not end the solve
-      scout.best = best;
-      scout.residual = best_residual;
-      scout.error = best_error;
-      scout.model = best_model;
-    }
+    if (cur.scout && scout.iterations == 0) saveBest(before_scout);
     const bool gauss_seidel = cur.kind == SolverKind::kNlgs || cur.kind == SolverKind::kPgs;
     int saved_slice = 0;
     member_params.sor = params.sor;
@@ -882,10 +896,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           continue;
         }
       }
-      best.swap(scout.best);
-      best_residual = scout.residual;
-      best_error = scout.error;
-      best_model = scout.model;
+      restoreBest(before_scout);
       members.erase(members.begin() + static_cast<long>(m));
       m = 0;
       continue;
@@ -895,12 +906,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (warmup_stage) {
         warmup_over = probe_sweeps + r.iterations >= kNewtonWarmupSweeps ||
                       best_residual <= std::max(params.tolerance, kNewtonWarmupTolerance);
-        if (warmup_over && !(best_residual > probe_start) && !failedToRun(r.status)) {
-          work.warmup = best;
-          warmup_residual = best_residual;
-          warmup_error = best_error;
-          warmup_model = best_model;
-        }
+        if (warmup_over && !(best_residual > probe_start) && !failedToRun(r.status)) saveBest(warmup_best);
       }
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
@@ -958,13 +964,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           (first == SolverKind::kNewton && probe_sweeps <= (warmup ? kNewtonWarmupSweeps : kAutoProbeSweeps) &&
            !(best_residual > probe_start));
       // A probe that ran through newton's warm-up hands newton the iterate at its end.
-      const bool warmup_done = warmup && first == SolverKind::kNewton && std::isfinite(warmup_residual);
-      if (warmup_done) {
-        best = work.warmup;
-        best_residual = warmup_residual;
-        best_error = warmup_error;
-        best_model = warmup_model;
-      }
+      const bool warmup_done = warmup && first == SolverKind::kNewton && std::isfinite(warmup_best.residual);
+      if (warmup_done) restoreBest(warmup_best);
       if (warmup && first == SolverKind::kNewton && (keep || warmup_done))
         for (PortfolioMember& mem : members)
           if (mem.kind == SolverKind::kNewton) mem.warmup_credit = warmup_done ? kNewtonWarmupSweeps : probe_sweeps;
