@@ -833,9 +833,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
-    // (a pyramid's own residual for a pyramid); otherwise measure it.
-    const bool own_measure = (by_residual || pyramid) && !failedToRun(r.status) &&
-                             std::isfinite(r.solver_error) && kernel_measured_x;
+    // (a pyramid's own residual for a pyramid); otherwise measure it. Lemke ending on a ray
+    // measured the forces it returned too (auto's plans on non-monotone LCPs end there often).
+    const bool measured_run = !failedToRun(r.status) ||
+                              (by_residual && cur.kind == SolverKind::kLemke && r.status == SolveStatus::kRayTermination);
+    const bool own_measure =
+        (by_residual || pyramid) && measured_run && std::isfinite(r.solver_error) && kernel_measured_x;
     double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()
                       : own_measure  ? r.solver_error
                                      : ctx.residual(x);
