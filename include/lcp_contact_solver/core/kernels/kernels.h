@@ -47,7 +47,8 @@ struct SolveContext {
   double regularization = 0.0;  // r added to W's diagonal
   int body_dof = 0;             // 6 × bodies when the body form is known: auto's rank-deficiency estimate
   // The residual of the λ a kernel is handed, when the caller already measured it (auto's
-  // check of λ = 0 on the whole problem); NaN when not known.
+  // check of λ = 0 on the whole problem, then per member the best iterate's); NaN when not
+  // known. newton reads it instead of measuring its start again.
   double start_residual = std::numeric_limits<double>::quiet_NaN();
   GaussSeidelMemo* gs_memo = nullptr;  // see above; none: each call forms its own
   // newton's warm-up sweeps the caller already ran (auto's probe: the same nlgs sweeps from
