@@ -833,10 +833,11 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
-    // (a pyramid's own residual for a pyramid); otherwise measure it. Lemke ending on a ray
-    // measured the forces it returned too (auto's plans on non-monotone LCPs end there often).
-    const bool measured_run = !failedToRun(r.status) ||
-                              (by_residual && cur.kind == SolverKind::kLemke && r.status == SolveStatus::kRayTermination);
+    // (a pyramid's own residual for a pyramid); otherwise measure it. Lemke, the one kernel
+    // that ends on a ray, measured the forces it returned there too (auto's plans on
+    // non-monotone LCPs end there often).
+    const bool measured_run =
+        !failedToRun(r.status) || (by_residual && r.status == SolveStatus::kRayTermination);
     const bool own_measure =
         (by_residual || pyramid) && measured_run && std::isfinite(r.solver_error) && kernel_measured_x;
     double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()

@@ -136,23 +136,21 @@ class LemkeTableau {
       column = inverse_.col(variable);
       return 1.0;
     }
-    if (variable < 2 * n_ && n_ > kPlainLoopSize) {
-      column.noalias() = -(inverse_ * lcp_->M.col(variable - n_));
-      return lcp_->M.col(variable - n_).cwiseAbs().maxCoeff();
-    }
     if (variable < 2 * n_) {
-      // -B⁻¹ M_j by rows of the row-major B⁻¹: on a few rows a plain loop costs a fraction of
-      // a GEMV call's set-up.
-      const double* m = lcp_->M.col(variable - n_).data();
-      double scale = 0.0;
-      for (int k = 0; k < n_; ++k) scale = std::max(scale, std::abs(m[k]));
-      for (int i = 0; i < n_; ++i) {
-        const double* row = inverse_.row(i).data();
-        double sum = 0.0;
-        for (int k = 0; k < n_; ++k) sum += row[k] * m[k];
-        column[i] = -sum;
+      const auto m = lcp_->M.col(variable - n_);
+      if (n_ > kPlainLoopSize) {
+        column.noalias() = -(inverse_ * m);
+      } else {
+        // -B⁻¹ M_j by rows of the row-major B⁻¹: on a few rows a plain loop costs a fraction of
+        // a GEMV call's set-up.
+        for (int i = 0; i < n_; ++i) {
+          const double* row = inverse_.row(i).data();
+          double sum = 0.0;
+          for (int k = 0; k < n_; ++k) sum += row[k] * m[k];
+          column[i] = -sum;
+        }
       }
-      return scale;
+      return m.cwiseAbs().maxCoeff();
     }
     column = -inverse_.rowwise().sum();
     return 1.0;
@@ -319,7 +317,6 @@ struct LemkeWorkspace {
   Eigen::VectorXd column, saved_values, refined;
   std::vector<int> saved_basis;
 };
-constexpr int kKeptWorkspaceRows = 64;
 
 }  // namespace
 
@@ -403,7 +400,7 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  const WorkspaceLease<LemkeWorkspace> lease(row_count, kKeptWorkspaceRows);
+  const WorkspaceLease<LemkeWorkspace> lease(row_count);
   LemkeWorkspace& ws = *lease;
   LcpData& lcp = ws.lcp;
   buildLcp(ctx, offsets, lcp);

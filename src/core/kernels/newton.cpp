@@ -439,7 +439,6 @@ struct NewtonWorkspace {
   DenseSystem dense;
   std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
 };
-constexpr int kKeptWorkspaceRows = 64;
 
 }  // namespace
 
@@ -473,7 +472,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const int warm_left = std::max(0, kNewtonWarmupSweeps - ctx.warmup_sweeps_done);
   warm_params.maxIt = std::min(params.maxIt, warm_left);
   warm_params.stopping_rule = StoppingRule::kResidual;
-  const WorkspaceLease<NewtonWorkspace> lease(n, kKeptWorkspaceRows);
+  const WorkspaceLease<NewtonWorkspace> lease(n);
   NewtonWorkspace& ws = *lease;
   SolveContext& warm_ctx = ws.warm_ctx;
   warm_ctx = ctx;

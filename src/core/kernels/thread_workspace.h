@@ -1,21 +1,23 @@
 // A kernel's scratch storage kept per thread between solves. A microsecond solve (a 4-row
 // LCP, a small island) spent a quarter of its time in malloc and free; vectors and matrices
 // assigned in place keep their storage from one solve to the next. A problem above
-// `max_rows` rows gets a workspace of its own (allocation is negligible there, and a kept
-// dense matrix would outlive the solve), and so does a nested use on the same thread.
+// kKeptWorkspaceRows rows gets a workspace of its own (allocation is negligible there, and a
+// kept dense matrix would outlive the solve), and so does a nested use on the same thread.
 #pragma once
 
 #include <memory>
 
 namespace lcp_contact_solver::core {
 
+constexpr int kKeptWorkspaceRows = 64;
+
 template <typename Workspace>
 class WorkspaceLease {
  public:
-  WorkspaceLease(int rows, int max_rows) {
+  explicit WorkspaceLease(int rows) {
     thread_local Workspace kept;
     thread_local bool kept_in_use = false;
-    if (rows <= max_rows && !kept_in_use) {
+    if (rows <= kKeptWorkspaceRows && !kept_in_use) {
       workspace_ = &kept;
       in_use_ = &kept_in_use;
       kept_in_use = true;
