@@ -101,15 +101,6 @@ double scalarSweepBytes(const core::Problem& p) {
   return 12.0 * double(W.values.size()) + 29.0 * double(W.blockCount());
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -321,8 +312,8 @@ int parseOptions(int argc, char** argv, Options* options) {
   if (const int code = lcs_bench::parseArguments(app, argc, argv); code >= 0) return code;
   o.repeat = std::max(1, o.repeat);
   o.threads = std::max(0, o.threads);
-  if (app.count("--ours")) o.ours = split(ours);
-  if (app.count("--mujoco")) o.mujoco = mujoco == "none" ? std::vector<std::string>() : split(mujoco);
+  if (app.count("--ours")) o.ours = lcs_bench::splitList(ours);
+  if (app.count("--mujoco")) o.mujoco = mujoco == "none" ? std::vector<std::string>() : lcs_bench::splitList(mujoco);
   if (storage == "dense")
     o.storage = MujocoExtractOptions::Storage::kDense;
   else if (storage == "block_sparse")

@@ -9,13 +9,14 @@
 #include "lcp_contact_solver/core/problem_io.h"
 #include "lcp_contact_solver/core/solver_param_table.h"
 
+#include "timing_util.h"
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -43,8 +44,7 @@ int main(int argc, char** argv) {
     core::SolveResult last;
   };
   std::vector<Entry> entries;
-  std::stringstream list(solvers);
-  for (std::string name; std::getline(list, name, ',');) {
+  for (const std::string& name : lcs_bench::splitList(solvers)) {
     Entry e;
     e.name = name;
     e.params.tolerance = tolerance;

@@ -48,12 +48,19 @@ inline std::string loadAverageText() {
   return a + " " + b + " " + c;
 }
 
-inline std::vector<int> parseIntList(const std::string& s) {
-  std::vector<int> out;
+// The items of a comma list ("auto,newton"; empty items skipped).
+inline std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
   std::stringstream in(s);
   std::string item;
   while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(std::stoi(item));
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+inline std::vector<int> parseIntList(const std::string& s) {
+  std::vector<int> out;
+  for (const std::string& item : splitList(s)) out.push_back(std::stoi(item));
   return out;
 }
 

@@ -15,6 +15,7 @@
 // solvers and the peers, the CSV), auto_regret_table.cpp (the table).
 #include "work_precision.h"
 #include "auto_regret_table.h"
+#include "timing_util.h"
 
 #include <CLI/CLI.hpp>
 
@@ -34,14 +35,7 @@ using wp::Clock;
 
 namespace {
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
+using lcs_bench::splitList;
 
 // Fills opt from the command line (CLI11); -1 to go on, else the exit code (0 after --help).
 int parseOptions(int argc, char** argv, wp::Options* options) {
@@ -74,17 +68,17 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
   try {
     app.parse(argc, argv);
     if (app.count("--families")) {
-      const auto v = split(families);
+      const auto v = splitList(families);
       opt.families = {v.begin(), v.end()};
     }
     if (app.count("--solvers")) {
-      const auto v = split(solvers);
+      const auto v = splitList(solvers);
       opt.solvers = {v.begin(), v.end()};
     }
-    if (app.count("--mujoco-models")) opt.mujoco_models = split(mujoco_models);
+    if (app.count("--mujoco-models")) opt.mujoco_models = splitList(mujoco_models);
     if (app.count("--mujoco-steps")) {
       opt.mujoco_steps.clear();
-      for (const std::string& step : split(mujoco_steps)) opt.mujoco_steps.push_back(std::stoi(step));
+      for (const std::string& step : splitList(mujoco_steps)) opt.mujoco_steps.push_back(std::stoi(step));
     }
     // --quick sets the tolerances and caps the budget: in command-line order, the later wins.
     for (const CLI::Option* given : app.parse_order()) {
@@ -92,7 +86,7 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
         opt.budget = budget;
       } else if (given == tolerances_opt) {
         opt.tolerances.clear();
-        for (const std::string& t : split(tolerances)) opt.tolerances.push_back(std::stod(t));
+        for (const std::string& t : splitList(tolerances)) opt.tolerances.push_back(std::stod(t));
       } else if (given == quick) {
         opt.tolerances = {1e-2, 1e-4, 1e-6, 1e-8};
         opt.pyramid_bases = {2, 5};
