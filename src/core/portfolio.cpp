@@ -85,6 +85,17 @@ constexpr double kAutoStrongDominant = 0.25;  // a Jacobi bound of 4x per sweep:
 constexpr int kAutoProbeFirst = 3;  // then stage by stage while their rate reaches the tolerance
 constexpr int kAutoProbeSweeps = 10;  // before the plan is measured; newton's own warm-up is as long
 constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
+// A symmetric LCP's newton (its active-set path) factorizes W_AA once per step, 1 to 4 steps:
+// a dense Cholesky of n rows is n³/6 multiply-adds where a sweep is n², about n/6 sweeps
+// (MuJoCo's sparse cloths and soft boxes measured n/13..n/6 per step). Gauss-Seidel probes
+// such an LCP only where two digits are asked, where a few sweeps may do (an active set is
+// exact whatever the tolerance, sweeps pay per digit: at 1e-3 the probe lost as often as it
+// won on MuJoCo's cloths, soft boxes and active_adhesion), and only where one factorization
+// costs at least kAutoProbeLcpFactorSweeps sweeps: a probe that gives up after its first
+// three then adds about 3/20 of a factorization to newton's solve (MuJoCo's humanoid
+// islands, 20-40 rows, are not probed).
+constexpr double kAutoProbeLcpTolerance = 5e-3;  // about two digits: a 1e-2 solve's islands get >= 0.7e-2
+constexpr int kAutoProbeLcpFactorSweeps = 20;
 // Before newton on multi-point or rank-deficient contacts, an apgd scout: where such a W is
 // well conditioned on the active set apgd ends in tens of iterations (box pyramids: 30-60)
 // against newton's 8-20 slow steps; where it is not (BoxesStack1, OneObject: thousands) the
@@ -129,11 +140,22 @@ class Plan {
   int size_ = 0;
 };
 
+// One dense factorization of a symmetric LCP's rows, in sweeps (kAutoProbeLcpFactorSweeps).
+int lcpFactorSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 6; }
+
+// Whether Gauss-Seidel probes a symmetric LCP whose plan starts with newton's active-set path.
+bool probesSymmetricLcp(const SolveContext& ctx) {
+  const SolverParams& p = *ctx.params;
+  const bool loose = p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoProbeLcpTolerance;
+  return loose && lcpFactorSweeps(ctx) >= kAutoProbeLcpFactorSweeps;
+}
+
 // How many sweeps the probe may go on for, when their rate says they reach the tolerance,
 // before the plan's first member would be cheaper. A Newton step factorizes W (n³/3 flops
 // dense) where a sweep is one pass over it: a frictional Newton solve costs at least about n
 // sweeps (measured 1.7..17 n on the fc3d problems and the scenes). On an LCP newton's
-// active-set path is a few Cholesky steps: the probe's ten. apgd's iteration is one product
+// active-set path is a few Cholesky steps: one of them (n/6 sweeps), at least the probe's
+// ten. apgd's iteration is one product
 // with W, about a sweep, and where Gauss-Seidel's rate is good apgd needs 2..6x its
 // iterations: fifty; before newton behind an apgd scout, the smaller of newton's and apgd's
 // (the scout is the member the probe's sweeps would save first). Others (Lemke, prox, a fixed
@@ -141,7 +163,7 @@ class Plan {
 int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction) {
   switch (plan.front()) {
     case SolverKind::kNewton: {
-      const int newton = friction ? std::max(kAutoProbeSweeps, ctx.problem->rowCount()) : kAutoProbeSweeps;
+      const int newton = std::max(kAutoProbeSweeps, friction ? ctx.problem->rowCount() : lcpFactorSweeps(ctx));
       return scout ? std::min(newton, kAutoProbeApgdSweeps) : newton;
     }
     case SolverKind::kApgd: return kAutoProbeApgdSweeps;
@@ -567,13 +589,14 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
 
 // The Gauss-Seidel kernel that can probe this problem (kAuto: none): not where the plan is
 // fixed (torsional/rolling contacts, the pyramid), not without a positive normal diagonal,
-// not for a block-sparse LCP.
+// not for a block-sparse LCP unless probesSymmetricLcp.
 SolverKind probeKind(const SolveContext& ctx, bool friction) {
   if (hasExtendedFriction(*ctx.problem)) return SolverKind::kAuto;
   if (friction && pyramidModel(*ctx.params)) return SolverKind::kAuto;
   // A block-sparse LCP is presumed symmetric (below): newton's active-set path, a few
   // Cholesky steps, is what the probe would delay (MuJoCo's pyramidal steps: +10..40 %).
-  if (!friction && std::holds_alternative<BlockSparseMatrix>(ctx.problem->W)) return SolverKind::kAuto;
+  if (!friction && std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !probesSymmetricLcp(ctx))
+    return SolverKind::kAuto;
   if (!ctx.problem->bodies && !ctx.positiveDiagonal()) return SolverKind::kAuto;
   return friction ? SolverKind::kNlgs : SolverKind::kPgs;
 }
@@ -663,12 +686,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
   // Except on a dense symmetric LCP (a convex QP) whose plan is newton's active-set path: a
   // few Cholesky steps whatever the coupling, which the probe's sweeps would only delay
-  // (MuJoCo's dense pyramidal steps: +45 %). The symmetry test stops at the first unequal
-  // pair, so a non-symmetric W pays almost nothing for it.
+  // (MuJoCo's dense pyramidal steps: +45 %), unless probesSymmetricLcp. The symmetry test
+  // stops at the first unequal pair, so a non-symmetric W pays almost nothing for it.
   if (probe_kind == SolverKind::kPgs && std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) &&
       ctx.problem->rowCount() <= kAutoLemkeRows) {
     known_symmetric = isSymmetric(ctx.problem->W, 1e-12) ? 1 : 0;
-    if (known_symmetric == 1 && planned().front() == SolverKind::kNewton) probe_kind = SolverKind::kAuto;
+    if (known_symmetric == 1 && planned().front() == SolverKind::kNewton && !probesSymmetricLcp(ctx))
+      probe_kind = SolverKind::kAuto;
   }
   if (probe_kind != SolverKind::kAuto) {
     PortfolioMember probe{probe_kind, kAutoProbeFirst};

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace lcp_contact_solver::core {
 namespace {
@@ -566,6 +567,49 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   skewed.W = W;
   const SolveResult s = solveProblem(skewed, params(SolverKind::kAuto, 1e-8, 5000));
   EXPECT_EQ(afterProbe(s).rfind("auto:lemke", 0), 0u) << s.solver;
+}
+
+// A symmetric LCP whose plan is newton's active-set path (κ = 0.6 here, not dominant enough for
+// pgs first) is probed by pgs only where two digits are asked and one factorization costs at
+// least twenty sweeps (rows / 6 >= 20): a chain of 150 coupled rows, which pgs contracts in a
+// few sweeps, then ends in the probe; at 1e-8, or with 60 rows, newton starts at once. Dense
+// and block-sparse alike (a block-sparse LCP is presumed symmetric).
+TEST(Portfolio, LargeSymmetricLcpAtTwoDigitsIsProbedByGaussSeidel) {
+  const auto chain = [](int n, bool sparse) {
+    Eigen::MatrixXd W = Eigen::MatrixXd::Identity(n, n);
+    Eigen::VectorXd d_free(n);
+    for (int i = 0; i < n; ++i) {
+      if (i + 1 < n) W(i, i + 1) = W(i + 1, i) = 0.3;
+      d_free[i] = -1.0 - 0.5 * std::sin(0.7 * i);
+    }
+    Problem p = frictionlessLcp(W, d_free);
+    if (sparse) {
+      BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(std::vector<int>(n, 1));
+      for (int i = 0; i < n; ++i) {
+        B.beginRow();
+        for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) B.addBlock(j, W.block(i, j, 1, 1));
+      }
+      p.W = B;
+    }
+    return p;
+  };
+  for (bool sparse : {false, true}) {
+    const Problem large = chain(150, sparse);
+    const SolveResult loose = solveProblem(large, params(SolverKind::kAuto, 1e-2, 1000));
+    ASSERT_TRUE(loose.converged) << loose.solver << ": " << loose.message;
+    EXPECT_EQ(loose.solver, "auto:pgs") << sparse;
+    EXPECT_LE(loose.iterations, 25) << sparse;  // within one factorization's sweeps
+    EXPECT_LE(recomputedResidual(large, loose), 1e-2);
+    const SolveResult tight = solveProblem(large, params(SolverKind::kAuto, 1e-8, 1000));
+    ASSERT_TRUE(tight.converged) << tight.solver << ": " << tight.message;
+    EXPECT_EQ(tight.solver, "auto:newton") << sparse;
+    EXPECT_LE(recomputedResidual(large, tight), 1e-8);
+    const Problem small = chain(60, sparse);
+    const SolveResult s = solveProblem(small, params(SolverKind::kAuto, 1e-2, 1000));
+    ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
+    EXPECT_EQ(s.solver, "auto:newton") << sparse;
+    EXPECT_LE(recomputedResidual(small, s), 1e-2);
+  }
 }
 
 // A bimatrix game's LCP (W = [0 A; Bᵀ 0]) has no diagonal: pgs cannot start (zero_diagonal),
