@@ -859,9 +859,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // With the residual rule every kernel's solver_error is the residual of what it returned
     // (a pyramid's own residual for a pyramid); otherwise measure it. Lemke, the one kernel
     // that ends on a ray, measured the forces it returned there too (auto's plans on
-    // non-monotone LCPs end there often).
-    const bool measured_run =
-        !failedToRun(r.status) || (by_residual && r.status == SolveStatus::kRayTermination);
+    // non-monotone LCPs end there often), a pyramid Lemke by its pyramid residual as pgs's is
+    // (measured again here it was the disc residual, compared with pgs's pyramid one).
+    const bool measured_run = !failedToRun(r.status) || r.status == SolveStatus::kRayTermination;
     const bool own_measure =
         (by_residual || pyramid) && measured_run && std::isfinite(r.solver_error) && kernel_measured_x;
     double residual = !x.allFinite() ? std::numeric_limits<double>::infinity()

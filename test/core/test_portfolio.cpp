@@ -678,6 +678,46 @@ TEST(Portfolio, NonSymmetricBlockSparseLcpIsStillSolved) {
   EXPECT_LE(recomputedResidual(lcp, d), 1e-10);
 }
 
+// A box pressed by three contacts whose cones cannot balance it (found by a random search):
+// with the four-sided pyramid pgs runs out of iterations and Lemke ends on a ray. Both
+// failed, auto returns the better iterate by the pyramid residual, the measure of every
+// member here (it once judged Lemke's by the disc residual, 9e5, and returned pgs's iterate,
+// pyramid residual 1.08, against Lemke's 0.77).
+TEST(Portfolio, PyramidMembersAreComparedByThePyramidResidual) {
+  World w;
+  w.add(hard::box(1.0, Eigen::Vector3d(0.2, 0.2, 0.2), Eigen::Vector3d(0.0, 0.0, 0.1)));
+  w.gravity.setZero();
+  w.bodies[0].v = Eigen::Vector3d(0.30709956068382738, 0.11168849306717443, -0.89115181605163385);
+  w.bodies[0].w = Eigen::Vector3d(-0.99617456573039576, -0.00073698359888996201, 0.18596468404572253);
+  // normal, point, μ, gap
+  const double contacts[3][8] = {
+      {0.86945483772697696, 0.49094067623509086, -0.055004886791881355, -0.099924128922067396,
+       0.07467883837190066, 0.019753918700012155, 1.1219173508270313, 0.0012778684042408783},
+      {0.42535550060312999, 0.90434064967896943, -0.035223393432208018, 0.026224407782496642,
+       -0.079267231144101127, -0.044592862680056793, 0.2998380083695516, -0.00077802933150954991},
+      {-0.58837162009196109, -0.61055277152988274, -0.53013597298008364, -0.021770629477739879,
+       -0.0056514969218544155, -0.015351727260496151, 0.42918414886735351, -0.021571325763366768}};
+  for (const auto& c : contacts)
+    w.contact(0, -1, Eigen::Vector3d(c[3], c[4], c[5]), Eigen::Vector3d(c[0], c[1], c[2]), c[6], c[7]);
+  const Problem p = w.problem();
+  const auto pyramid = [](SolverKind kind) {
+    SolverParams q = params(kind, 1e-8, 2000);
+    q.friction_model = FrictionModel::kPyramid4;
+    return q;
+  };
+  const SolveResult pgs = solveProblem(p, pyramid(SolverKind::kPgs));
+  const SolveResult lemke = solveProblem(p, pyramid(SolverKind::kLemke));
+  ASSERT_FALSE(pgs.converged);
+  ASSERT_EQ(lemke.status, SolveStatus::kRayTermination);
+  ASSERT_LT(lemke.solver_error, 0.9 * pgs.solver_error);  // Lemke's iterate is the better one
+  const SolveResult r = solveProblem(p, pyramid(SolverKind::kAuto));
+  EXPECT_FALSE(r.converged);
+  EXPECT_NE(r.solver.find("lemke"), std::string::npos) << r.solver;
+  EXPECT_EQ(r.friction_model, FrictionModel::kPyramid4);
+  EXPECT_LE(r.solver_error, lemke.solver_error * (1.0 + 1e-9)) << r.solver;
+  EXPECT_TRUE(r.forces.allFinite());
+}
+
 TEST(Portfolio, ProxIsANamedSolver) {
   SolverKind kind;
   ASSERT_TRUE(parseSolverName("prox", &kind));
