@@ -15,6 +15,8 @@
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <string>
+#include <utility>
 
 namespace lcp_contact_solver::core {
 
@@ -747,7 +749,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   double best_error = best_residual;
   FrictionModel best_model = FrictionModel::kCoulombDisc;
   SolveStatus last_failure = SolveStatus::kMaxIterations;
-  std::string last_message;
+  SolverKind last_failed = SolverKind::kAuto;
+  std::string last_message;  // the member's own: composed only if every member fails
   int used = 0;
   std::size_t m = 0;
   struct {
@@ -854,7 +857,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     member.warmup_sweeps_done = cur.warmup_credit;
     member.warmup_start_was_warm = cur.warmup_credit > 0 && !origin.isZero(0.0);
     cur.warmup_credit = 0;
-    const KernelReport r = runKernel(cur.kind, member, x);
+    KernelReport r = runKernel(cur.kind, member, x);  // not const: a failed member's message is moved
     if (cur.scout) scout.x = x;
     // A kernel that let a force through on an ignored contact measured the rest against it
     // (fuzzing: a 1e-18 force times a W entry of DBL_MAX made a penetrating contact look
@@ -1023,7 +1026,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     }
     if (failedToRun(r.status) || (r.status == SolveStatus::kConverged && !converged)) {
       last_failure = failedToRun(r.status) ? r.status : SolveStatus::kNumericalFailure;
-      last_message = std::string(solverName(cur.kind)) + ": " + r.message;
+      last_failed = cur.kind;
+      last_message = std::move(r.message);
       members.erase(members.begin() + static_cast<long>(m));
       if (m >= members.size()) m = 0;
       continue;
@@ -1070,7 +1074,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   if (members.empty() && report.status != SolveStatus::kConverged) {  // (converged: a warm start's active set)
     report.status = last_failure;
-    report.message = "auto: every member failed; last " + last_message;
+    report.message = "auto: every member failed; last " + std::string(solverName(last_failed)) + ": " + last_message;
   }
   // The probe's restarted stage may have made an iterate above the start's residual the best
   // so far: a solve that ended without lowering it returns the start.

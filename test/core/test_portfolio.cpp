@@ -749,6 +749,18 @@ TEST(Portfolio, PyramidMembersAreComparedByThePyramidResidual) {
   EXPECT_TRUE(r.forces.allFinite());
 }
 
+// W = -I: no member can solve it (pgs cannot start, Lemke ends on a ray, newton and apgd
+// diverge). auto fails honestly and names the last member that failed and its reason.
+TEST(Portfolio, WhenEveryMemberFailsTheMessageNamesTheLast) {
+  const Problem p = frictionlessLcp(-Eigen::MatrixXd::Identity(2, 2), Eigen::Vector2d(1.0, -1.0));
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, 1e-8, 10000));
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.status, SolveStatus::kNumericalFailure) << r.message;
+  const std::string last = r.solver.substr(r.solver.find_last_of(":>") + 1);
+  EXPECT_EQ(r.message.rfind("auto: every member failed; last " + last + ": ", 0), 0u) << r.message;
+  EXPECT_TRUE(r.forces.allFinite());
+}
+
 TEST(Portfolio, ProxIsANamedSolver) {
   SolverKind kind;
   ASSERT_TRUE(parseSolverName("prox", &kind));
