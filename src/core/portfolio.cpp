@@ -1074,7 +1074,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   }
   if (members.empty() && report.status != SolveStatus::kConverged) {  // (converged: a warm start's active set)
     report.status = last_failure;
-    report.message = "auto: every member failed; last " + std::string(solverName(last_failed)) + ": " + last_message;
+    // Some kernels name themselves in their messages ("apgd: the iterate became non-finite …").
+    const std::string name = std::string(solverName(last_failed)) + ": ";
+    report.message = "auto: every member failed; last " + (last_message.rfind(name, 0) == 0 ? "" : name) + last_message;
   }
   // The probe's restarted stage may have made an iterate above the start's residual the best
   // so far: a solve that ended without lowering it returns the start.

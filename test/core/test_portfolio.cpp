@@ -758,6 +758,7 @@ TEST(Portfolio, WhenEveryMemberFailsTheMessageNamesTheLast) {
   EXPECT_EQ(r.status, SolveStatus::kNumericalFailure) << r.message;
   const std::string last = r.solver.substr(r.solver.find_last_of(":>") + 1);
   EXPECT_EQ(r.message.rfind("auto: every member failed; last " + last + ": ", 0), 0u) << r.message;
+  EXPECT_EQ(r.message.find(last + ": " + last + ": "), std::string::npos) << r.message;  // named once
   EXPECT_TRUE(r.forces.allFinite());
 }
 
