@@ -146,11 +146,10 @@ class Plan {
 // One dense factorization of a symmetric LCP's rows, in sweeps (kAutoProbeLcpFactorSweeps).
 int lcpFactorSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 6; }
 
-// Whether Gauss-Seidel probes a symmetric LCP whose plan starts with newton's active-set path.
+// Whether Gauss-Seidel probes a symmetric LCP whose plan starts with newton's active-set path
+// (asked only under the residual rule, the one the probe runs under).
 bool probesSymmetricLcp(const SolveContext& ctx) {
-  const SolverParams& p = *ctx.params;
-  const bool loose = p.stopping_rule != StoppingRule::kResidual || p.tolerance >= kAutoProbeLcpTolerance;
-  return loose && lcpFactorSweeps(ctx) >= kAutoProbeLcpFactorSweeps;
+  return ctx.params->tolerance >= kAutoProbeLcpTolerance && lcpFactorSweeps(ctx) >= kAutoProbeLcpFactorSweeps;
 }
 
 // How many sweeps the probe may go on for, when their rate says they reach the tolerance,
