@@ -250,26 +250,31 @@ class NewtonSystem {
   virtual void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) = 0;
 };
 
+// Its arrays keep their capacity from one problem to the next (kKeptDenseRows): a MuJoCo
+// stream's row count changes every step, where a MatrixXd would be reallocated.
 class DenseSystem : public NewtonSystem {
  public:
-  // Sized for W (storage kept from the last problem when it fits).
   void reset(const Eigen::MatrixXd& W, double regularization) {
-    W_ = W;
-    W_.diagonal().array() += regularization;
-    J_.resize(W.rows(), W.cols());
+    n_ = W.rows();
+    w_.resize(static_cast<std::size_t>(n_ * n_));
+    j_.resize(static_cast<std::size_t>(n_ * n_));
+    shiftedW() = W;
+    shiftedW().diagonal().array() += regularization;
   }
   bool factorize(const std::vector<NewtonContact>& contacts, const std::vector<JacobianBlocks>& blocks,
                  double epsilon) override {
     // J's rows of a contact: B_c times W's rows of it, plus A_c on the diagonal block. Plain
     // loops: a GEMM call per contact cost more than the product on one- and three-row blocks.
-    const Eigen::Index n = W_.rows();
+    const Eigen::Index n = n_;
+    const Eigen::Map<const Eigen::MatrixXd> W(w_.data(), n_, n_);
+    Eigen::Map<Eigen::MatrixXd> J = newtonMatrix();
     for (std::size_t i = 0; i < contacts.size(); ++i) {
       const NewtonContact& nc = contacts[i];
       const int m = nc.rows;
       const double* B = blocks[i].B;
       for (Eigen::Index j = 0; j < n; ++j) {
-        const double* w = W_.col(j).data() + nc.offset;  // W's column j on the contact's rows
-        double* out = J_.col(j).data() + nc.offset;
+        const double* w = W.col(j).data() + nc.offset;  // W's column j on the contact's rows
+        double* out = J.col(j).data() + nc.offset;
         for (int r = 0; r < m; ++r) {
           double sum = 0.0;
           for (int k = 0; k < m; ++k) sum += B[r * m + k] * w[k];
@@ -278,24 +283,27 @@ class DenseSystem : public NewtonSystem {
       }
       const double* A = blocks[i].A;
       for (int r = 0; r < m; ++r)
-        for (int c = 0; c < m; ++c) J_(nc.offset + r, nc.offset + c) += A[r * m + c];
+        for (int c = 0; c < m; ++c) J(nc.offset + r, nc.offset + c) += A[r * m + c];
     }
-    J_.diagonal().array() += epsilon;
+    J.diagonal().array() += epsilon;
     small_ = n <= kSmallLuRows;
     if (small_)
       factorSmall();
     else
-      lu_.compute(J_);
+      lu_ = std::make_unique<Eigen::PartialPivLU<Eigen::Ref<Eigen::MatrixXd>>>(J);  // in place: J's storage
     return true;
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
     if (small_)
       solveSmall(rhs, x);
     else
-      x = lu_.solve(rhs);
+      x = lu_->solve(rhs);
   }
 
  private:
+  Eigen::Map<Eigen::MatrixXd> shiftedW() { return {w_.data(), n_, n_}; }
+  Eigen::Map<Eigen::MatrixXd> newtonMatrix() { return {j_.data(), n_, n_}; }
+
   // Up to this size J is factorised by the plain loops below: on a 4-row system Eigen's
   // blocked LU spent more on its set-up than on the arithmetic.
   static constexpr int kSmallLuRows = 32;
@@ -305,9 +313,9 @@ class DenseSystem : public NewtonSystem {
   // pivot column is left as it is (as Eigen does): the solve then yields a non-finite Δ,
   // which the caller rejects.
   void factorSmall() {
-    const int n = static_cast<int>(J_.rows());
+    const int n = static_cast<int>(n_);
     pivots_.resize(n);
-    double* a = J_.data();
+    double* a = j_.data();
     for (int k = 0; k < n; ++k) {
       int p = k;
       double biggest = std::abs(a[k + k * n]);
@@ -331,8 +339,8 @@ class DenseSystem : public NewtonSystem {
     }
   }
   void solveSmall(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const {
-    const int n = static_cast<int>(J_.rows());
-    const double* a = J_.data();
+    const int n = static_cast<int>(n_);
+    const double* a = j_.data();
     x = rhs;
     // The swaps moved whole rows (L's columns too): all of them first, as LAPACK's getrs.
     for (int k = 0; k < n; ++k) std::swap(x[k], x[pivots_[k]]);
@@ -344,9 +352,9 @@ class DenseSystem : public NewtonSystem {
     }
   }
 
-  Eigen::MatrixXd W_;
-  Eigen::MatrixXd J_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+  Eigen::Index n_ = 0;
+  std::vector<double> w_, j_;  // W + r I and J + ε I (then its LU), column-major
+  std::unique_ptr<Eigen::PartialPivLU<Eigen::Ref<Eigen::MatrixXd>>> lu_;
   std::vector<int> pivots_;
   bool small_ = false;
 };
@@ -472,7 +480,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const int warm_left = std::max(0, kNewtonWarmupSweeps - ctx.warmup_sweeps_done);
   warm_params.maxIt = std::min(params.maxIt, warm_left);
   warm_params.stopping_rule = StoppingRule::kResidual;
-  const WorkspaceLease<NewtonWorkspace> lease(n);
+  const WorkspaceLease<NewtonWorkspace, kKeptDenseRows> lease(n);  // its Newton matrix is n x n
   NewtonWorkspace& ws = *lease;
   SolveContext& warm_ctx = ws.warm_ctx;
   warm_ctx = ctx;

@@ -39,6 +39,7 @@
 // rows and columns of I are replaced by the identity, so the pattern (and the AMD ordering
 // and elimination tree, analysed once per solve) is the same at every iteration.
 #include "newton_symmetric.h"
+#include "thread_workspace.h"
 
 #include "lcp_contact_solver/core/residual.h"
 
@@ -123,9 +124,11 @@ class DenseReduced : public ReducedSystem {
  public:
   // W + r I is written by the caller into W() (n × n, column-major).
   DenseReduced(DenseScratch& s, int n) : s_(s), n_(n) { s_.W.resize(static_cast<std::size_t>(n) * n); }
-  // A large dense W is not kept past its solve (the scratch is for many small islands).
+  // The storage of a W of up to kKeptDenseRows rows is kept for the next solve
+  // (thread_workspace.h: freed, its pages fault again); a larger one is freed, the scratch
+  // being per thread.
   ~DenseReduced() override {
-    constexpr std::size_t kKeep = 256 * 256;
+    constexpr std::size_t kKeep = static_cast<std::size_t>(kKeptDenseRows) * kKeptDenseRows;
     if (s_.W.capacity() > kKeep) std::vector<double>().swap(s_.W);
     if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
     if (s_.A.size() > static_cast<Eigen::Index>(kKeep)) {
