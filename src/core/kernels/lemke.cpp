@@ -48,10 +48,13 @@ struct LcpVariable {
 };
 
 // The LCP w = M z + q assembled from the active rows of the problem.
+// M's storage keeps its capacity from one problem to the next (thread_workspace.h).
 struct LcpData {
   std::vector<LcpVariable> variables;
-  Eigen::MatrixXd M;  // column-major: the entering column of z_j is M.col(j)
+  std::vector<double> m_storage;  // M, column-major: the entering column of z_j is M.col(j)
   Eigen::VectorXd q;
+  Eigen::Map<Eigen::MatrixXd> M() { return {m_storage.data(), q.size(), q.size()}; }
+  Eigen::Map<const Eigen::MatrixXd> M() const { return {m_storage.data(), q.size(), q.size()}; }
 };
 
 void buildLcp(const SolveContext& ctx, const std::vector<int>& offsets, LcpData& lcp) {
@@ -80,15 +83,16 @@ void buildLcp(const SolveContext& ctx, const std::vector<int>& offsets, LcpData&
   const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W);
   if (dense == nullptr) converted = toDense(problem.W);
   const Eigen::MatrixXd& W = dense != nullptr ? *dense : converted;
-  lcp.M.resize(n, n);
+  lcp.m_storage.resize(static_cast<std::size_t>(n) * n);
   lcp.q.resize(n);
+  Eigen::Map<Eigen::MatrixXd> M = lcp.M();
   for (int j = 0; j < n; ++j) {
     const LcpVariable& vj = lcp.variables[j];
     for (int i = 0; i < n; ++i) {
       const LcpVariable& vi = lcp.variables[i];
       double value = W(vi.row, vj.row);
       if (vi.row == vj.row) value += ctx.regularization;
-      lcp.M(i, j) = vi.sign * vj.sign * value;
+      M(i, j) = vi.sign * vj.sign * value;
     }
     lcp.q(j) = vj.sign * problem.d_free(vj.row);
   }
@@ -113,11 +117,12 @@ class LemkeTableau {
  public:
   static constexpr int kPlainLoopSize = 16;
 
-  // The start: every w basic (storage kept from the last problem when it fits).
+  // The start: every w basic (B⁻¹'s storage keeps its capacity from the last problem).
   void reset(const LcpData& lcp) {
     lcp_ = &lcp;
     n_ = static_cast<int>(lcp.q.size());
-    inverse_.setIdentity(n_, n_);
+    inverse_storage_.resize(static_cast<std::size_t>(n_) * n_);
+    inverse().setIdentity();
     values_ = lcp.q;
     basis_.resize(n_);
     for (int i = 0; i < n_; ++i) basis_[i] = i;
@@ -133,18 +138,20 @@ class LemkeTableau {
   // before the product (the scale of its rounding error).
   double enteringColumn(int variable, Eigen::VectorXd& column) const {
     if (variable < n_) {
-      column = inverse_.col(variable);
+      column = inverse().col(variable);
       return 1.0;
     }
     if (variable < 2 * n_) {
-      const auto m = lcp_->M.col(variable - n_);
+      const Eigen::Map<const Eigen::MatrixXd> M = lcp_->M();
+      const auto m = M.col(variable - n_);
+      const Eigen::Map<const RowMajorMatrix> inv = inverse();
       if (n_ > kPlainLoopSize) {
-        column.noalias() = -(inverse_ * m);
+        column.noalias() = -(inv * m);
       } else {
         // -B⁻¹ M_j by rows of the row-major B⁻¹: on a few rows a plain loop costs a fraction of
         // a GEMV call's set-up.
         for (int i = 0; i < n_; ++i) {
-          const double* row = inverse_.row(i).data();
+          const double* row = inv.row(i).data();
           double sum = 0.0;
           for (int k = 0; k < n_; ++k) sum += row[k] * m[k];
           column[i] = -sum;
@@ -152,7 +159,7 @@ class LemkeTableau {
       }
       return m.cwiseAbs().maxCoeff();
     }
-    column = -inverse_.rowwise().sum();
+    column = -inverse().rowwise().sum();
     return 1.0;
   }
 
@@ -182,7 +189,7 @@ class LemkeTableau {
     double min_ratio = std::numeric_limits<double>::infinity();
     for (int i = 0; i < n_; ++i) {
       if (column[i] <= pivot_floor) continue;
-      const double row_scale = inverse_.row(i).cwiseAbs().maxCoeff();
+      const double row_scale = inverse().row(i).cwiseAbs().maxCoeff();
       if (column[i] <= kRoundoffTolerance * row_scale * entering_scale) continue;
       const double noise = std::max(value_floor, kRoundoffTolerance * row_scale * q_scale);
       const double value = values_[i] > noise ? values_[i] : 0.0;
@@ -208,7 +215,7 @@ class LemkeTableau {
       double min_entry = std::numeric_limits<double>::infinity();
       double entry_scale = 0.0;
       for (Candidate& c : ties_) {
-        const double raw = inverse_(c.row, col);
+        const double raw = inverse()(c.row, col);
         c.ratio = std::abs(raw) <= kRoundoffTolerance * c.row_scale ? 0.0 : raw / column[c.row];
         min_entry = std::min(min_entry, c.ratio);
         entry_scale = std::max(entry_scale, std::abs(c.ratio));
@@ -232,27 +239,28 @@ class LemkeTableau {
   // Makes `variable` basic in `row`; returns the variable that left.
   int pivot(int row, int variable, const Eigen::VectorXd& column) {
     const double inverse_pivot = 1.0 / column[row];
-    inverse_.row(row) *= inverse_pivot;
+    inverse().row(row) *= inverse_pivot;
     values_[row] *= inverse_pivot;
     // Eliminate the entering column from the other rows: a rank-one update with the
     // pivot row copied out, so the update never reads a row it is writing.
-    pivot_row_ = inverse_.row(row);
+    pivot_row_ = inverse().row(row);
     multipliers_ = column;
     multipliers_[row] = 0.0;
-    inverse_.noalias() -= multipliers_ * pivot_row_;
+    inverse().noalias() -= multipliers_ * pivot_row_;
     values_ -= multipliers_ * values_[row];
     const int left = basis_[row];
     basis_[row] = variable;
     return left;
   }
 
-  bool rowFinite(int row) const { return inverse_.row(row).allFinite(); }
+  bool rowFinite(int row) const { return inverse().row(row).allFinite(); }
 
   // Two rounds of iterative refinement of the basic values with the current B⁻¹:
   // x += B⁻¹ (q - B x). Recovers digits lost to rounding across many pivots.
   Eigen::VectorXd refinedValues() const {
     Eigen::VectorXd x = values_;
     Eigen::VectorXd defect(n_);
+    const Eigen::Map<const Eigen::MatrixXd> M = lcp_->M();
     for (int round = 0; round < kRefinementRounds; ++round) {
       defect = lcp_->q;
       for (int i = 0; i < n_; ++i) {
@@ -260,12 +268,12 @@ class LemkeTableau {
         if (variable < n_) {
           defect[variable] -= x[i];
         } else if (variable < 2 * n_) {
-          defect.noalias() += lcp_->M.col(variable - n_) * x[i];
+          defect.noalias() += M.col(variable - n_) * x[i];
         } else {
           defect.array() += x[i];
         }
       }
-      x.noalias() += inverse_ * defect;
+      x.noalias() += inverse() * defect;
     }
     return x;
   }
@@ -292,9 +300,12 @@ class LemkeTableau {
   }
 
  private:
+  Eigen::Map<RowMajorMatrix> inverse() { return {inverse_storage_.data(), n_, n_}; }
+  Eigen::Map<const RowMajorMatrix> inverse() const { return {inverse_storage_.data(), n_, n_}; }
+
   const LcpData* lcp_ = nullptr;
   int n_ = 0;
-  RowMajorMatrix inverse_;  // B⁻¹, row-major: a pivot updates whole rows
+  std::vector<double> inverse_storage_;  // B⁻¹, row-major: a pivot updates whole rows
   Eigen::VectorXd values_;  // B⁻¹ q, the basic variables' values
   std::vector<int> basis_;  // basic variable of each row
 
@@ -400,12 +411,13 @@ KernelReport runLemke(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     return report;
   }
 
-  const WorkspaceLease<LemkeWorkspace> lease(row_count);
+  // Its M and B⁻¹ are n x n in the LCP's variables, up to two per row (bilateral rows).
+  const WorkspaceLease<LemkeWorkspace, kKeptDenseRows / 2> lease(row_count);
   LemkeWorkspace& ws = *lease;
   LcpData& lcp = ws.lcp;
   buildLcp(ctx, offsets, lcp);
   const int n = static_cast<int>(lcp.q.size());
-  if (!lcp.q.allFinite() || !lcp.M.allFinite()) {
+  if (!lcp.q.allFinite() || !lcp.M().allFinite()) {
     lambda = Eigen::VectorXd::Zero(row_count);
     report.status = SolveStatus::kNumericalFailure;
     report.message = "Lemke: the matrix or d_free has non-finite entries";

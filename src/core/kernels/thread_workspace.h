@@ -1,24 +1,23 @@
 // A kernel's scratch storage kept per thread between solves. A microsecond solve (a 4-row
 // LCP, a small island) spent a quarter of its time in malloc and free; vectors and matrices
-// assigned in place keep their storage from one solve to the next. A problem above the
-// lease's row bound gets a workspace of its own, and so does a nested use on the same thread.
-// The bound is kKeptWorkspaceRows by default (Lemke's tableau: a kept dense matrix would
-// outlive the solve) and kKeptDenseRows for the factorizations' n x n arrays (newton's Newton
-// matrix and copy of W, the active-set path's W and W_AA), held as vectors whose capacity
-// survives a change of size: freed, a megabyte array goes back to the system when it tops the
-// heap, and each of its 4 KB pages faults again when the next solve writes it
+// assigned in place keep their storage from one solve to the next. The n x n arrays of a
+// factorization or a tableau (newton's Newton matrix and copy of W, the active-set path's W
+// and W_AA, Lemke's M and B⁻¹) are vectors whose capacity survives a change of size, kept up
+// to kKeptDenseRows: freed, a megabyte array goes back to the system when it tops the heap,
+// and each of its 4 KB pages faults again when the next solve writes it
 // (bench/storage_stream.cpp: a stream of 700-row LCPs faulted 1 900 pages per solve, 53 ms
-// against 23 ms kept, on this VM). Kept, such an array holds at most 8 MB per thread.
+// against 23 ms kept, on this VM). Kept, such an array holds at most 8 MB per thread. A
+// problem above the lease's bound gets a workspace of its own, and so does a nested use on
+// the same thread.
 #pragma once
 
 #include <memory>
 
 namespace lcp_contact_solver::core {
 
-constexpr int kKeptWorkspaceRows = 64;
 constexpr int kKeptDenseRows = 1024;
 
-template <typename Workspace, int kMaxRows = kKeptWorkspaceRows>
+template <typename Workspace, int kMaxRows>
 class WorkspaceLease {
  public:
   explicit WorkspaceLease(int rows) {
