@@ -7,7 +7,6 @@
 //   solve_repeat FILE [--tolerance T] [--solvers auto,newton,apgd] [--solves N] [--rounds R]
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/problem_io.h"
-#include "lcp_contact_solver/core/solver_param_table.h"
 
 #include "timing_util.h"
 
@@ -16,7 +15,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -37,27 +35,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const core::Problem problem = core::readProblemFile(file);
-  struct Entry {
-    std::string name;
-    core::SolverParams params;
-    double best = std::numeric_limits<double>::infinity();
-    core::SolveResult last;
-  };
-  std::vector<Entry> entries;
-  for (const std::string& name : lcs_bench::splitList(solvers)) {
-    Entry e;
-    e.name = name;
-    e.params.tolerance = tolerance;
-    e.params.maxIt = 100000;
-    const std::string fault = core::setParam(&e.params, "solver", name);
-    if (!fault.empty()) {
-      std::fprintf(stderr, "solve_repeat: %s\n", fault.c_str());
-      return 2;
-    }
-    entries.push_back(e);
+  std::string fault;
+  std::vector<lcs_bench::RepeatedSolver> entries = lcs_bench::repeatedSolvers(solvers, tolerance, &fault);
+  if (!fault.empty()) {
+    std::fprintf(stderr, "solve_repeat: %s\n", fault.c_str());
+    return 2;
   }
   for (int round = 0; round < rounds; ++round) {
-    for (Entry& e : entries) {
+    for (lcs_bench::RepeatedSolver& e : entries) {
       const auto start = std::chrono::steady_clock::now();
       for (int k = 0; k < solves; ++k) e.last = core::solveProblem(problem, e.params);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -65,7 +50,7 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("%-10s %12s %-18s %10s %12s  %s\n", "solver", "us/solve", "status", "iterations", "residual", "path");
-  for (const Entry& e : entries)
+  for (const lcs_bench::RepeatedSolver& e : entries)
     std::printf("%-10s %12.3f %-18s %10d %12.3g  %s\n", e.name.c_str(), e.best * 1e6, core::statusName(e.last.status),
                 e.last.iterations, e.last.residual, e.last.solver.c_str());
   return 0;

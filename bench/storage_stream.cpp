@@ -7,7 +7,6 @@
 // (the fastest round counts) so that all of them see the same mixture of machine states.
 //   storage_stream [--contacts 200] [--friction] [--solvers newton,prox,auto] [--solves 10] [--rounds 5]
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/core/solver_param_table.h"
 
 #include "timing_util.h"
 
@@ -17,7 +16,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -74,29 +72,16 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const core::Problem problems[2] = {pressedStack(contacts, friction, 1), pressedStack(contacts - 1, friction, 2)};
-  struct Entry {
-    std::string name;
-    core::SolverParams params;
-    double best = std::numeric_limits<double>::infinity();
-    long faults = 0;
-    core::SolveResult last;
-  };
-  std::vector<Entry> entries;
-  for (const std::string& name : lcs_bench::splitList(solvers)) {
-    Entry e;
-    e.name = name;
-    e.params.tolerance = tolerance;
-    e.params.maxIt = 100000;
-    const std::string fault = core::setParam(&e.params, "solver", name);
-    if (!fault.empty()) {
-      std::fprintf(stderr, "storage_stream: %s\n", fault.c_str());
-      return 2;
-    }
-    for (const core::Problem& p : problems) core::solveProblem(p, e.params);  // untimed: first-use costs
-    entries.push_back(e);
+  std::string fault;
+  std::vector<lcs_bench::RepeatedSolver> entries = lcs_bench::repeatedSolvers(solvers, tolerance, &fault);
+  if (!fault.empty()) {
+    std::fprintf(stderr, "storage_stream: %s\n", fault.c_str());
+    return 2;
   }
+  for (const lcs_bench::RepeatedSolver& e : entries)
+    for (const core::Problem& p : problems) core::solveProblem(p, e.params);  // untimed: first-use costs
   for (int round = 0; round < rounds; ++round) {
-    for (Entry& e : entries) {
+    for (lcs_bench::RepeatedSolver& e : entries) {
       const long faults = minorFaults();
       const auto start = lcs_bench::Clock::now();
       for (int k = 0; k < solves; ++k) e.last = core::solveProblem(problems[k % 2], e.params);
@@ -108,7 +93,7 @@ int main(int argc, char** argv) {
               friction ? "frictional" : "frictionless");
   std::printf("%-10s %12s %12s %-12s %10s %12s  %s\n", "solver", "us/solve", "faults/solve", "status", "iterations",
               "residual", "path");
-  for (const Entry& e : entries)
+  for (const lcs_bench::RepeatedSolver& e : entries)
     std::printf("%-10s %12.1f %12.1f %-12s %10d %12.3g  %s\n", e.name.c_str(), e.best * 1e6,
                 e.faults / (static_cast<double>(rounds) * solves), core::statusName(e.last.status), e.last.iterations,
                 e.last.residual, e.last.solver.c_str());

@@ -8,6 +8,7 @@
 #include "lcp_contact_solver/core/body_compliance.h"
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/problem.h"
+#include "lcp_contact_solver/core/solver_param_table.h"
 
 #include <Eigen/Core>
 
@@ -55,6 +56,33 @@ inline std::vector<std::string> splitList(const std::string& s) {
   std::string item;
   while (std::getline(in, item, ','))
     if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// One solver of a benchmark that repeats solves in rounds (solve_repeat, storage_stream): its
+// `solver` value and parameters, its fastest round's time per solve, the minor page faults
+// over every round (where measured) and its last answer.
+struct RepeatedSolver {
+  std::string name;
+  lcs::core::SolverParams params;
+  double best = std::numeric_limits<double>::infinity();
+  long faults = 0;
+  lcs::core::SolveResult last;
+};
+
+// The solvers of a comma list of `solver` values, at `tolerance` with maxIt 100 000; on an
+// unknown value none, and the parameter table's message in *error.
+inline std::vector<RepeatedSolver> repeatedSolvers(const std::string& list, double tolerance, std::string* error) {
+  std::vector<RepeatedSolver> out;
+  for (const std::string& name : splitList(list)) {
+    RepeatedSolver s;
+    s.name = name;
+    s.params.tolerance = tolerance;
+    s.params.maxIt = 100000;
+    *error = lcs::core::setParam(&s.params, "solver", name);
+    if (!error->empty()) return {};
+    out.push_back(std::move(s));
+  }
   return out;
 }
 
