@@ -58,7 +58,9 @@ using Clock = std::chrono::steady_clock;
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
 // first-order methods) hands over to the next member; a member that fails (not_applicable,
 // zero_diagonal, numerical_failure, ray termination) leaves the rotation; a member that
-// progresses continues with a doubled slice; once every member ran, a stall hands over to
+// progresses continues with a doubled slice (but a Gauss-Seidel member whose remaining sweeps
+// would cost more than newton's warm-up and two factorizations hands over to an untried
+// newton: newtonCheaperThanSweeps); once every member ran, a stall hands over to
 // the member with the fastest residual decrease per second, and a member that could not
 // move from the best iterate at all gets one slice from the warm start instead. The first
 // slices of a plan's Gauss-Seidel member are a trial of over-relaxation (kAutoOmegaTrial).
@@ -126,6 +128,20 @@ constexpr int kAutoOmegaTrial = 10;
 // A member that progresses but whose rate needs more than this many times the solve's
 // iterations so far lets the members not tried yet run one slice each (runPortfolio).
 constexpr double kAutoExploreFactor = 4.0;
+// Also, newton before any other member not tried yet, where a Gauss-Seidel member's remaining
+// sweeps at the rate of its last slice outnumber what newton would cost from its iterate: its
+// own warm-up and kAutoNewtonSteps LU factorizations, each 2n³/3 flops against a sweep's 2n²,
+// i.e. n/3 sweeps. Gauss-Seidel converges linearly, so its sweeps grow with every digit asked
+// while newton's steps do not. Only where that flop count holds: a dense W, or a block-sparse
+// one up to kAutoNewtonRows rows (a larger sparse LU fills in: on a 40-sphere pile newton took
+// 5.7x Gauss-Seidel's time); not on the body form, whose W newton would first assemble.
+constexpr int kAutoNewtonSteps = 2;
+bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
+  const int n = ctx.problem->rowCount();
+  const bool counted = !ctx.problem->bodies &&
+                       (std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) || n <= kAutoNewtonRows);
+  return counted && sweeps > kNewtonWarmupSweeps + kAutoNewtonSteps * n / 3.0;
+}
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
  public:
@@ -1048,9 +1064,16 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // tried yet runs one slice from the best iterate, no longer than the solve so far, so
       // that a member which keeps halving the residual in ever longer slices cannot hide a
       // faster one. Counted in iterations, not seconds: the same problem takes the same path.
+      // After a Gauss-Seidel slice, an untried newton goes first where newtonCheaperThanSweeps.
       if (by_residual && untried != members.size()) {
         const double per_iteration = std::log(start_residual / best_residual) / r.iterations;
-        if (std::log(best_residual / params.tolerance) > kAutoExploreFactor * used * per_iteration) {
+        const double needed = std::log(best_residual / params.tolerance) / per_iteration;
+        std::size_t newton = members.size();
+        for (std::size_t k = 0; k < members.size() && gauss_seidel; ++k)
+          if (members[k].kind == SolverKind::kNewton && !members[k].tried) newton = k;
+        const bool newton_cheaper = newton != members.size() && newtonCheaperThanSweeps(ctx, needed);
+        if (newton_cheaper) untried = newton;
+        if (needed > kAutoExploreFactor * used || newton_cheaper) {
           PortfolioMember& next = members[untried];
           if (next.kind != SolverKind::kLemke) next.slice = std::max(1, std::min(next.slice, used));  // pivots: not sliced
           m = untried;

@@ -356,6 +356,31 @@ TEST(Portfolio, GaussSeidelOverRelaxesOnlyWhereATrialSaysSo) {
   EXPECT_LE(t.iterations, nlgs.iterations + 20);
 }
 
+// Gauss-Seidel converges linearly: at a tight tolerance its remaining sweeps outnumber what
+// newton costs from its iterate (its warm-up and two factorizations, n/3 sweeps each), and an
+// untried newton then takes over. Two walls of balls: one block-sparse (108 rows), one dense
+// (300 rows), where nlgs alone needs 430 and 800 sweeps for 1e-8 and newton ends in a few
+// steps. Before the rule auto swept on for as long as nlgs alone. Each answer is checked
+// against Coulomb's law from the forces.
+TEST(Portfolio, GaussSeidelHandsOverToNewtonWhereItsSweepsWouldCostMore) {
+  const double tol = 1e-8;
+  for (const Problem& balls : {solvers_test::toBlockSparse(ballTriangle(6, 0.5)), ballTriangle(10, 0.5)}) {
+    const SolveResult nlgs = solveProblem(balls, params(SolverKind::kNlgs, tol, 100000));
+    ASSERT_TRUE(nlgs.converged) << nlgs.message;
+    const SolveResult r = solveProblem(balls, params(SolverKind::kAuto, tol, 100000));
+    ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+    EXPECT_EQ(r.solver.rfind("auto:nlgs", 0), 0u) << r.solver;
+    EXPECT_NE(r.solver.find("->newton"), std::string::npos) << r.solver;
+    EXPECT_LT(2 * r.iterations, nlgs.iterations) << r.solver;
+    EXPECT_LE(recomputedResidual(balls, r), tol);
+  }
+  // At 1e-4 the sweeps left are fewer than newton's cost: Gauss-Seidel alone.
+  const SolveResult loose = solveProblem(ballTriangle(10, 0.5), params(SolverKind::kAuto, 1e-4, 100000));
+  ASSERT_TRUE(loose.converged) << loose.message;
+  EXPECT_EQ(loose.solver.find("newton"), std::string::npos) << loose.solver;
+  EXPECT_LE(recomputedResidual(ballTriangle(10, 0.5), loose), 1e-4);
+}
+
 // Two boxes on the ground and a third across them, four points under each box: the small
 // brick pyramid of the scenes (16 contacts, 48 rows against 18 DoF), pushed sideways.
 Problem brickPyramid(double push, double mu) {
