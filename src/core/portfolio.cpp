@@ -1069,8 +1069,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         const double per_iteration = std::log(start_residual / best_residual) / r.iterations;
         const double needed = std::log(best_residual / params.tolerance) / per_iteration;
         std::size_t newton = members.size();
-        for (std::size_t k = 0; k < members.size() && gauss_seidel; ++k)
-          if (members[k].kind == SolverKind::kNewton && !members[k].tried) newton = k;
+        if (gauss_seidel)
+          for (std::size_t k = 0; k < members.size(); ++k)
+            if (members[k].kind == SolverKind::kNewton && !members[k].tried) newton = k;
         const bool newton_cheaper = newton != members.size() && newtonCheaperThanSweeps(ctx, needed);
         if (newton_cheaper) untried = newton;
         if (needed > kAutoExploreFactor * used || newton_cheaper) {
