@@ -123,22 +123,46 @@ class Faults : public testing::Test {
 };
 
 // Splits the contacts/forces stream into simulator runs: a run starts where the contacts'
-// stamp goes back. For each run: its contacts stamps and the forces that came during it.
+// stamp goes back. For each run: its contacts stamps and the forces that belong to it.
+// Contacts (from the simulator) and forces (from the node) come over two connections, so a
+// run's first forces can overtake its first contacts at the test. Stamps repeat from run to
+// run, so a force goes to the run whose contacts of the same stamp arrived nearest in wall
+// time (a restart takes far longer than a solve); one whose stamp no run sent goes to the run
+// under way when it arrived, where the test reports it as stale.
 struct SimRun {
   std::map<ros::Time, std::size_t> contacts;  // stamp → contacts in the array
+  std::map<ros::Time, ros::WallTime> arrival;  // stamp → when those contacts arrived
+  ros::WallTime start;
   std::vector<Event> forces;
 };
 std::vector<SimRun> splitRuns(const std::vector<Event>& events) {
   std::vector<SimRun> runs;
   ros::Time last;
   for (const Event& e : events) {
-    if (e.kind == Event::kContacts) {
-      if (runs.empty() || e.stamp < last) runs.emplace_back();
-      runs.back().contacts[e.stamp] = e.contacts;
-      last = e.stamp;
-    } else if (!runs.empty()) {
-      runs.back().forces.push_back(e);
+    if (e.kind != Event::kContacts) continue;
+    if (runs.empty() || e.stamp < last) {
+      runs.emplace_back();
+      runs.back().start = e.arrival;
     }
+    runs.back().contacts[e.stamp] = e.contacts;
+    runs.back().arrival[e.stamp] = e.arrival;
+    last = e.stamp;
+  }
+  for (const Event& e : events) {
+    if (e.kind != Event::kForces || runs.empty()) continue;
+    SimRun* nearest = nullptr;
+    double nearest_gap = 0.0;
+    for (SimRun& run : runs) {
+      auto it = run.arrival.find(e.stamp);
+      if (it == run.arrival.end()) continue;
+      const double gap = std::abs((e.arrival - it->second).toSec());
+      if (nearest == nullptr || gap < nearest_gap) nearest = &run, nearest_gap = gap;
+    }
+    if (nearest == nullptr) {  // the run under way when it arrived
+      for (SimRun& run : runs)
+        if (run.start <= e.arrival) nearest = &run;
+    }
+    if (nearest != nullptr) nearest->forces.push_back(e);
   }
   return runs;
 }
