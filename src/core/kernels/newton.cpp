@@ -35,8 +35,10 @@
 // that barely move the residual get ten such sweeps at once, kept only if they reach the
 // tenfold decrease. A warm-started solve that stalls a second time restarts once from
 // λ = 0; one whose best residual has not halved over five such rounds stops with
-// numerical_failure (a floor of its own, not worth the rest of the budget). Iterations
-// count Newton steps plus nlgs sweeps.
+// numerical_failure (a floor of its own, not worth the rest of the budget), and so does one
+// that comes back to an earlier stall's residual with nothing better found between (a limit
+// cycle: the iteration is deterministic, it would repeat). Iterations count Newton steps
+// plus nlgs sweeps.
 //
 // Globalisation: Armijo backtracking on the merit ψ = ½ |Φ|²,
 // ψ(λ + t Δ) <= (1 - 2 σ t) ψ(λ), with u(λ + t Δ) = u + t W Δ (one product per iteration).
@@ -94,6 +96,20 @@ constexpr std::size_t kStallsBeforeColdStart = 2;
 // steps and a burst), Newton sits at a floor of its own (round-off on a singular
 // linearisation) and more rounds only burn the budget; it says so instead.
 constexpr int kFruitlessStalls = 5;
+
+// A limit cycle: the iteration is deterministic, so a stall that comes back to the residual
+// of an earlier stall (to round-off) with the best residual unchanged since then repeats
+// the same rounds forever (a capsule pile's 48-row island: a period of 120 iterations, run
+// five times before the fruitless-stall test ended it). Stalls are few (one per 10 steps).
+constexpr double kCycleTolerance = 1e-12;
+bool stallRepeats(const std::vector<double>& best_at_stall, const std::vector<double>& residual_at_stall,
+                  double best_residual, double residual) {
+  for (std::size_t k = 0; k < residual_at_stall.size(); ++k)
+    if (best_at_stall[k] == best_residual &&
+        std::abs(residual_at_stall[k] - residual) <= kCycleTolerance * residual)
+      return true;
+  return false;
+}
 
 enum class RowKind : std::uint8_t { kIdentity, kNormal, kFrictional, kFrictionalNormalOnly, kBilateral };
 
@@ -446,6 +462,7 @@ struct NewtonWorkspace {
   std::vector<JacobianBlocks> blocks;
   DenseSystem dense;
   std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
+  std::vector<double> residual_at_stall;  // the current residual at each stall (cycle test)
 };
 
 }  // namespace
@@ -560,6 +577,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const bool warm_started = ctx.warmup_sweeps_done > 0 ? ctx.warmup_start_was_warm : start.squaredNorm() > 0.0;
   std::vector<double>& best_at_stall = ws.best_at_stall;  // the best residual at each stall
   best_at_stall.clear();
+  std::vector<double>& residual_at_stall = ws.residual_at_stall;
+  residual_at_stall.clear();
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   double previous_residual = std::numeric_limits<double>::infinity();
@@ -632,15 +651,25 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       stagnation_burst_tried = false;
       const bool stalled = residual > kStallFactor * checkpoint_residual;
       if (stalled) {
+        // (not where this stall restarts a warm start cold: that changes the iteration)
+        const bool restart_due = warm_started && best_at_stall.size() + 1 == kStallsBeforeColdStart;
+        const bool cycling = !restart_due && stallRepeats(best_at_stall, residual_at_stall, best_residual, residual);
         best_at_stall.push_back(best_residual);
+        residual_at_stall.push_back(residual);
         const std::size_t k = best_at_stall.size();
-        if (k > kFruitlessStalls && best_residual > 0.5 * best_at_stall[k - 1 - kFruitlessStalls]) {
+        if (cycling || (k > kFruitlessStalls && best_residual > 0.5 * best_at_stall[k - 1 - kFruitlessStalls])) {
           report.status = SolveStatus::kNumericalFailure;
-          char line[160];
-          std::snprintf(line, sizeof line,
-                        "newton: stalled at residual %.3g (not halved over %d rounds of Newton steps and "
-                        "nlgs sweeps); best iterate returned",
-                        best_residual, kFruitlessStalls);
+          char line[200];
+          if (cycling)
+            std::snprintf(line, sizeof line,
+                          "newton: cycling at residual %.3g (a stall came back to an earlier stall's residual "
+                          "with no better iterate between); best iterate returned",
+                          best_residual);
+          else
+            std::snprintf(line, sizeof line,
+                          "newton: stalled at residual %.3g (not halved over %d rounds of Newton steps and "
+                          "nlgs sweeps); best iterate returned",
+                          best_residual, kFruitlessStalls);
           report.message = line;
           break;
         }
@@ -651,6 +680,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         // linearisation badly conditioned; the cold start does not (best is kept). It gets
         // the same warm-up sweeps as the start did.
         lambda.setZero();
+        residual_at_stall.assign(residual_at_stall.size(), std::numeric_limits<double>::quiet_NaN());
         if (nlgs_usable) {
           warm_params.maxIt = std::min(kNewtonWarmupSweeps, params.maxIt - newton_steps - sweeps);
           sweeps += runNonlinearGaussSeidel(warm_ctx, lambda).iterations;
