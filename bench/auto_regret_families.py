@@ -18,9 +18,9 @@ import sys
 OWN = {"nlgs", "nlgs-sor1.3", "apgd", "newton", "prox", "pgs", "lemke", "pgs-pyramid4", "lemke-pyramid4"}
 
 
-def reached(r, tol):
+def reached(r, tol, time_col="time_s"):
     try:
-        res, _ = float(r["residual"]), float(r["time_s"])
+        res, _ = float(r["residual"]), float(r[time_col])
     except ValueError:
         return False
     if not res <= tol:
@@ -32,19 +32,21 @@ def geomean(v):
     return math.exp(sum(map(math.log, v)) / len(v)) if v else float("nan")
 
 
-def ratios(rows, fam, tol):
-    """auto / fastest own and auto / best Siconos for every problem of `fam` at `tol`."""
+def ratios(rows, fam, tol, time_col="time_s"):
+    """auto / fastest own and auto / best Siconos for every problem of `fam` at `tol`
+    (times from `time_col`: the median of the repeats, or time_min_s, the fastest)."""
     cells = collections.defaultdict(dict)
     for r in rows:
         if r["family"] != fam:
             continue
         if r["tolerance"] != "" and abs(float(r["tolerance"]) - tol) > 1e-3 * tol:
             continue
-        if not reached(r, tol):
+        if not reached(r, tol, time_col):
             continue
-        c, t, s = cells[r["problem"]], float(r["time_s"]), r["solver"]
+        c, t, s = cells[r["problem"]], float(r[time_col]), r["solver"]
         if s == "auto":
             c["auto"] = t
+            c["path"] = (r["path"], r["iterations"])
         elif s in OWN:
             c["own"] = min(c.get("own", math.inf), t)
         elif s.startswith("siconos"):
