@@ -92,6 +92,14 @@ TEST(SharedProblemsSolvers, ApgdReachesOneMicroOnTheStacks) {
   }
 }
 
+// The natural-map residual of `forces`, from W and d_free alone.
+double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces) {
+  Eigen::VectorXd d;
+  multiply(p.W, forces, d);
+  d += p.d_free;
+  return naturalMapResidual(p, effectiveMu(p, SolverParams().mu), forces, d);
+}
+
 // A limit cycle: on one 48-row island of a capsule pile, newton's rounds of Newton steps and
 // nlgs bursts repeat the same residuals (3.9e-6, period 120 iterations). It says so at the
 // first repeat instead of after five fruitless rounds (642 iterations), returns its best
@@ -107,18 +115,13 @@ TEST(SharedProblemsSolvers, NewtonEndsALimitCycleAtItsFirstRepeat) {
   EXPECT_EQ(r.status, SolveStatus::kNumericalFailure) << r.message;
   EXPECT_NE(r.message.find("cycling"), std::string::npos) << r.message;
   EXPECT_LT(r.iterations, 400);
-  Eigen::VectorXd d;
-  multiply(island.W, r.forces, d);
-  d += island.d_free;
-  const double residual = naturalMapResidual(island, effectiveMu(island, SolverParams().mu), r.forces, d);
+  const double residual = recomputedResidual(island, r.forces);
   EXPECT_NEAR(residual, r.residual, 1e-12);
   EXPECT_GT(residual, 1e-6);  // the cycle's floor: newton did not solve it
   EXPECT_LT(residual, 1e-5);
   const SolveResult a = solveProblem(island, params(SolverKind::kAuto, 1e-6, 100000));
   EXPECT_EQ(a.status, SolveStatus::kConverged) << a.message;
-  multiply(island.W, a.forces, d);
-  d += island.d_free;
-  EXPECT_LE(naturalMapResidual(island, effectiveMu(island, SolverParams().mu), a.forces, d), 1e-6);
+  EXPECT_LE(recomputedResidual(island, a.forces), 1e-6);
 }
 
 // Cut short, apgd says so and keeps its best iterate.

@@ -130,8 +130,11 @@ class Faults : public testing::Test {
 // time (a restart takes far longer than a solve); one whose stamp no run sent goes to the run
 // under way when it arrived, where the test reports it as stale.
 struct SimRun {
-  std::map<ros::Time, std::size_t> contacts;  // stamp → contacts in the array
-  std::map<ros::Time, ros::WallTime> arrival;  // stamp → when those contacts arrived
+  struct Step {
+    std::size_t contacts = 0;  // in the array
+    ros::WallTime arrival;     // of the array
+  };
+  std::map<ros::Time, Step> steps;  // by stamp
   ros::WallTime start;
   std::vector<Event> forces;
 };
@@ -144,8 +147,7 @@ std::vector<SimRun> splitRuns(const std::vector<Event>& events) {
       runs.emplace_back();
       runs.back().start = e.arrival;
     }
-    runs.back().contacts[e.stamp] = e.contacts;
-    runs.back().arrival[e.stamp] = e.arrival;
+    runs.back().steps[e.stamp] = {e.contacts, e.arrival};
     last = e.stamp;
   }
   for (const Event& e : events) {
@@ -153,9 +155,9 @@ std::vector<SimRun> splitRuns(const std::vector<Event>& events) {
     SimRun* nearest = nullptr;
     double nearest_gap = 0.0;
     for (SimRun& run : runs) {
-      auto it = run.arrival.find(e.stamp);
-      if (it == run.arrival.end()) continue;
-      const double gap = std::abs((e.arrival - it->second).toSec());
+      auto it = run.steps.find(e.stamp);
+      if (it == run.steps.end()) continue;
+      const double gap = std::abs((e.arrival - it->second.arrival).toSec());
       if (nearest == nullptr || gap < nearest_gap) nearest = &run, nearest_gap = gap;
     }
     if (nearest == nullptr) {  // the run under way when it arrived
@@ -186,15 +188,14 @@ TEST_F(Faults, ARestartedSimulatorGetsTheForcesOfAllItsSteps) {
     std::map<ros::Time, int> got;
     for (const Event& f : run.forces) {
       // A stale force would carry a stamp this run has not sent (yet) or the wrong size.
-      auto it = run.contacts.find(f.stamp);
-      ASSERT_NE(it, run.contacts.end())
-          << "run " << r << ": forces stamped " << f.stamp << " not of this run";
-      EXPECT_EQ(f.contacts, it->second) << "run " << r << " stamp " << f.stamp;
+      auto it = run.steps.find(f.stamp);
+      ASSERT_NE(it, run.steps.end()) << "run " << r << ": forces stamped " << f.stamp << " not of this run";
+      EXPECT_EQ(f.contacts, it->second.contacts) << "run " << r << " stamp " << f.stamp;
       ++got[f.stamp];
     }
     int with_contacts = 0;
-    for (const auto& c : run.contacts) {
-      if (c.second == 0) continue;
+    for (const auto& c : run.steps) {
+      if (c.second.contacts == 0) continue;
       ++with_contacts;
       EXPECT_EQ(got[c.first], 1) << "run " << r << ": step at " << c.first << " got " << got[c.first]
                                  << " forces";

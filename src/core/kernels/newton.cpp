@@ -102,12 +102,13 @@ constexpr int kFruitlessStalls = 5;
 // the same rounds forever (a capsule pile's 48-row island: a period of 120 iterations, run
 // five times before the fruitless-stall test ended it). Stalls are few (one per 10 steps).
 constexpr double kCycleTolerance = 1e-12;
-bool stallRepeats(const std::vector<double>& best_at_stall, const std::vector<double>& residual_at_stall,
-                  double best_residual, double residual) {
-  for (std::size_t k = 0; k < residual_at_stall.size(); ++k)
-    if (best_at_stall[k] == best_residual &&
-        std::abs(residual_at_stall[k] - residual) <= kCycleTolerance * residual)
-      return true;
+struct Stall {
+  double best;      // the best residual so far
+  double residual;  // the current one (NaN: not comparable, the iteration changed since)
+};
+bool stallRepeats(const std::vector<Stall>& stalls, double best_residual, double residual) {
+  for (const Stall& s : stalls)
+    if (s.best == best_residual && std::abs(s.residual - residual) <= kCycleTolerance * residual) return true;
   return false;
 }
 
@@ -461,8 +462,7 @@ struct NewtonWorkspace {
   std::vector<NewtonContact> contacts;
   std::vector<JacobianBlocks> blocks;
   DenseSystem dense;
-  std::vector<double> best_at_stall;  // the best residual at each stall (their count: the stalls)
-  std::vector<double> residual_at_stall;  // the current residual at each stall (cycle test)
+  std::vector<Stall> stalls;  // one per stall, in order
 };
 
 }  // namespace
@@ -575,10 +575,8 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   bool nlgs_usable =
       warm.status != SolveStatus::kZeroDiagonal && warm.status != SolveStatus::kNumericalFailure;
   const bool warm_started = ctx.warmup_sweeps_done > 0 ? ctx.warmup_start_was_warm : start.squaredNorm() > 0.0;
-  std::vector<double>& best_at_stall = ws.best_at_stall;  // the best residual at each stall
-  best_at_stall.clear();
-  std::vector<double>& residual_at_stall = ws.residual_at_stall;
-  residual_at_stall.clear();
+  std::vector<Stall>& stalls = ws.stalls;
+  stalls.clear();
   double checkpoint_residual = std::numeric_limits<double>::infinity();
   int since_checkpoint = 0;
   double previous_residual = std::numeric_limits<double>::infinity();
@@ -652,12 +650,11 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       const bool stalled = residual > kStallFactor * checkpoint_residual;
       if (stalled) {
         // (not where this stall restarts a warm start cold: that changes the iteration)
-        const bool restart_due = warm_started && best_at_stall.size() + 1 == kStallsBeforeColdStart;
-        const bool cycling = !restart_due && stallRepeats(best_at_stall, residual_at_stall, best_residual, residual);
-        best_at_stall.push_back(best_residual);
-        residual_at_stall.push_back(residual);
-        const std::size_t k = best_at_stall.size();
-        if (cycling || (k > kFruitlessStalls && best_residual > 0.5 * best_at_stall[k - 1 - kFruitlessStalls])) {
+        const bool restart_due = warm_started && stalls.size() + 1 == kStallsBeforeColdStart;
+        const bool cycling = !restart_due && stallRepeats(stalls, best_residual, residual);
+        stalls.push_back({best_residual, residual});
+        const std::size_t k = stalls.size();
+        if (cycling || (k > kFruitlessStalls && best_residual > 0.5 * stalls[k - 1 - kFruitlessStalls].best)) {
           report.status = SolveStatus::kNumericalFailure;
           char line[200];
           if (cycling)
@@ -674,13 +671,13 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           break;
         }
       }
-      if (stalled && best_at_stall.size() == kStallsBeforeColdStart && warm_started) {
+      if (stalled && stalls.size() == kStallsBeforeColdStart && warm_started) {
         // A warm start that still stalls after a burst is dropped: on a rank-deficient W
         // the previous forces can carry internal (null-space) forces that leave the
         // linearisation badly conditioned; the cold start does not (best is kept). It gets
         // the same warm-up sweeps as the start did.
         lambda.setZero();
-        residual_at_stall.assign(residual_at_stall.size(), std::numeric_limits<double>::quiet_NaN());
+        for (Stall& stall : stalls) stall.residual = std::numeric_limits<double>::quiet_NaN();
         if (nlgs_usable) {
           warm_params.maxIt = std::min(kNewtonWarmupSweeps, params.maxIt - newton_steps - sweeps);
           sweeps += runNonlinearGaussSeidel(warm_ctx, lambda).iterations;
