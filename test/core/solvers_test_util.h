@@ -1,4 +1,5 @@
-// Problems and checks shared by the core tests (test_solvers*.cpp, test_portfolio.cpp, test_islands.cpp).
+// Problems and checks shared by the core tests (test_solvers*.cpp, test_portfolio.cpp, test_islands.cpp,
+// test_shared_problems_solvers.cpp).
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"
@@ -99,6 +100,15 @@ inline void expectFinite(const SolveResult& r) {
   EXPECT_TRUE(r.d.allFinite());
   EXPECT_TRUE(std::isfinite(r.residual));
   EXPECT_TRUE(std::isfinite(r.solver_error));
+}
+
+// The natural-map residual of `forces`, from W and d_free alone (not from the solver's d).
+inline double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces,
+                                 double default_mu = SolverParams().mu) {
+  Eigen::VectorXd d;
+  multiply(p.W, forces, d);
+  d += p.d_free;
+  return naturalMapResidual(p, effectiveMu(p, default_mu), forces, d);
 }
 
 // The reported path and stages agree: "auto:" + the stage names joined by "->".

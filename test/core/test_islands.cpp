@@ -84,13 +84,7 @@ double maxDiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return a.size() == b.size() ? (a - b).cwiseAbs().maxCoeff() : 1e300;
 }
 
-// The residual of `forces`, from W and d_free (not from the solver's d).
-double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces, double default_mu = 0.6) {
-  Eigen::VectorXd d;
-  multiply(p.W, forces, d);
-  d += p.d_free;
-  return naturalMapResidual(p, effectiveMu(p, default_mu), forces, d);
-}
+using solvers_test::recomputedResidual;
 
 TEST(Islands, FindsTheGroupsOfInterleavedContacts) {
   for (bool sparse : {false, true}) {

@@ -50,10 +50,7 @@ SolverParams params(SolverKind kind, double tolerance, int max_it) {
 
 // The natural-map residual of the returned forces, from W and d_free alone.
 double recomputedResidual(const Problem& p, const SolveResult& r) {
-  Eigen::VectorXd d;
-  multiply(p.W, r.forces, d);
-  d += p.d_free;
-  return naturalMapResidual(p, effectiveMu(p, SolverParams().mu), r.forces, d);
+  return solvers_test::recomputedResidual(p, r.forces);
 }
 
 // An LCP: one frictionless contact per row of W.

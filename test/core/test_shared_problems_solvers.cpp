@@ -1,5 +1,7 @@
 // The added solvers on the shared reference problems (../shared/problems, Siconos test
 // data written by others): what each must reach there.
+#include "solvers_test_util.h"
+
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/islands.h"
 #include "lcp_contact_solver/core/residual.h"
@@ -92,13 +94,7 @@ TEST(SharedProblemsSolvers, ApgdReachesOneMicroOnTheStacks) {
   }
 }
 
-// The natural-map residual of `forces`, from W and d_free alone.
-double recomputedResidual(const Problem& p, const Eigen::VectorXd& forces) {
-  Eigen::VectorXd d;
-  multiply(p.W, forces, d);
-  d += p.d_free;
-  return naturalMapResidual(p, effectiveMu(p, SolverParams().mu), forces, d);
-}
+using solvers_test::recomputedResidual;
 
 // A limit cycle: on one 48-row island of a capsule pile, newton's rounds of Newton steps and
 // nlgs bursts repeat the same residuals (3.9e-6, period 120 iterations). It says so at the
