@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""A/B of two builds of auto: auto-only work_precision runs of a base core and a variant
+(`work_precision --solvers auto`, each core through LD_LIBRARY_PATH), compared cell by cell.
+Several runs of one side (comma list) are pooled, each cell's fastest repeat (time_min_s)
+over them: this machine's speed drifts by up to 1.6x within minutes, so alternate the runs
+(base, variant, base, variant) and pool them.
+
+    bench/auto_ab.py STUDY.csv BASE.csv[,BASE2.csv] VARIANT.csv[,VARIANT2.csv]
+
+STUDY.csv is a full study (every solver): a cell's regret there (auto / fastest own, the
+median time, as in the regret table) times the variant's time ratio estimates the variant's
+regret where auto's work changed (its path or the iterations of its slowest island); where
+it did not, the ratio is the noise between the runs and the regret is kept. Printed: per
+tolerance the geometric mean of the time ratios over all cells and over the changed ones,
+and the cells above 1.5x before and after; every changed cell; the spread of the ratio over
+the unchanged cells. Caveat: on a problem solved by islands the path and iterations are
+the slowest island's, so a change on the others shows only in the time.
+"""
+import collections
+import csv
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from auto_regret_families import ratios, reached  # noqa: E402
+
+TOLS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+
+
+def study_regrets(path):
+    rows = list(csv.DictReader(open(path)))
+    out = {}
+    for fam in sorted({r["family"] for r in rows}):
+        for tol in TOLS:
+            for problem, c in ratios(rows, fam, tol).items():
+                if "auto" in c and "own" in c:
+                    out[(problem, tol)] = c["auto"] / c["own"]
+    return out
+
+
+def pooled(paths):
+    """(problem, tolerance) -> (fastest time over the runs, path, iterations), or None where a
+    run did not reach the tolerance."""
+    out = {}
+    for path in paths.split(","):
+        for r in csv.DictReader(open(path)):
+            if r["solver"] != "auto" or r["tolerance"] == "":
+                continue
+            tol = min(TOLS, key=lambda t: abs(math.log(t / float(r["tolerance"]))))
+            key = (r["problem"], tol)
+            if not reached(r, tol, "time_min_s"):
+                out[key] = None
+            elif out.get(key, 0) is not None:
+                t = float(r["time_min_s"])
+                if key not in out or t < out[key][0]:
+                    out[key] = (t, r["path"], r["iterations"])
+    return out
+
+
+def quantile(v, q):
+    return v[min(len(v) - 1, int(q * len(v)))]
+
+
+def main(study, base_runs, variant_runs):
+    regret = study_regrets(study)
+    base, variant = pooled(base_runs), pooled(variant_runs)
+    logs, logs_changed = collections.defaultdict(list), collections.defaultdict(list)
+    above = collections.defaultdict(lambda: [0, 0])
+    changed, same = [], []
+    for key, b in sorted(base.items()):
+        if key not in regret or key not in variant:
+            continue
+        v = variant[key]
+        if (b is None) != (v is None):
+            print(f"reached in one side only: {key[0]} {key[1]:g} (base {b is not None}, variant {v is not None})")
+        if b is None or v is None:
+            continue
+        ratio, work_changed = v[0] / b[0], b[1:] != v[1:]
+        logs[key[1]].append(math.log(ratio))
+        if work_changed:
+            logs_changed[key[1]].append(math.log(ratio))
+        above[key[1]][0] += regret[key] > 1.5
+        above[key[1]][1] += regret[key] * (ratio if work_changed else 1.0) > 1.5
+        (changed if work_changed else same).append((ratio, key, b, v))
+    for tol in TOLS:
+        if logs[tol]:
+            g = math.exp(sum(logs[tol]) / len(logs[tol]))
+            c = logs_changed[tol]
+            gc = f"{math.exp(sum(c) / len(c)):.3f} ({len(c)} cells)" if c else "-"
+            print(f"{tol:g}: variant/base geo mean {g:.3f}, over the changed cells {gc}; "
+                  f"cells above 1.5x {above[tol][0]} -> {above[tol][1]}")
+    print(f"cells whose work changed: {len(changed)}")
+    for ratio, key, b, v in sorted(changed):
+        r = regret[key]
+        print(f"  {key[0][:40]:40} {key[1]:<6g} x{ratio:.2f}  regret {r:.2f} -> {r * ratio:.2f}  "
+              f"{b[1]}({b[2]}) -> {v[1]}({v[2]})")
+    if same:
+        s = sorted(x[0] for x in same)
+        print(f"same work ({len(s)} cells), variant/base: p10 {quantile(s, 0.1):.2f}, "
+              f"median {quantile(s, 0.5):.2f}, p90 {quantile(s, 0.9):.2f}")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 4:
+        sys.exit(__doc__)
+    main(*sys.argv[1:])
