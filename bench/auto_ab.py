@@ -9,12 +9,12 @@ over them: this machine's speed drifts by up to 1.6x within minutes, so alternat
 
 STUDY.csv is a full study (every solver): a cell's regret there (auto / fastest own, the
 median time, as in the regret table) times the variant's time ratio estimates the variant's
-regret where auto's work changed (its path or the iterations of its slowest island); where
-it did not, the ratio is the noise between the runs and the regret is kept. Printed: per
+regret where auto's work changed (below); where it did not, the ratio is the noise between the runs and the regret is kept. Printed: per
 tolerance the geometric mean of the time ratios over all cells and over the changed ones,
 and the cells above 1.5x before and after; every changed cell; the spread of the ratio over
-the unchanged cells. Caveat: on a problem solved by islands the path and iterations are
-the slowest island's, so a change on the others shows only in the time.
+the unchanged cells. The work compared is auto's path and iterations, both the slowest
+island's on a problem solved by islands, and the iterations summed over the islands
+(total_iterations; CSVs from before that column hide a change on the other islands).
 """
 import collections
 import csv
@@ -54,7 +54,8 @@ def pooled(paths):
             elif out.get(key, 0) is not None:
                 t = float(r["time_min_s"])
                 if key not in out or t < out[key][0]:
-                    out[key] = (t, r["path"], r["iterations"])
+                    # the work: the path, the slowest island's iterations and (newer CSVs) all islands'
+                    out[key] = (t, r["path"], r["iterations"] + "/" + r.get("total_iterations", ""))
     return out
 
 

@@ -84,6 +84,7 @@ struct Row {
   int repeats = 0;
   double residual = kNaN, model_residual = kNaN, peer_error = kNaN;
   std::string path;  // ours: SolveResult::solver (auto's members, e.g. auto:newton->prox)
+  int total_iterations = -1;  // ours: SolveResult::total_iterations (summed over islands); -1: iterations
 };
 
 // ---- problems (work_precision_problems.cpp) ----

@@ -71,7 +71,8 @@ void writeRow(std::ostream& os, const Row& r) {
   os << r.family << ',' << r.problem << ',' << r.contacts << ',' << r.rows << ',' << r.solver << ','
      << r.setting << ',' << fmt(r.tolerance) << ',' << r.status << ',' << (r.converged ? 1 : 0) << ','
      << r.iterations << ',' << fmt(r.time_median) << ',' << fmt(r.time_min) << ',' << r.repeats << ','
-     << fmt(r.residual) << ',' << fmt(r.model_residual) << ',' << fmt(r.peer_error) << ',' << r.path << '\n';
+     << fmt(r.residual) << ',' << fmt(r.model_residual) << ',' << fmt(r.peer_error) << ',' << r.path << ','
+     << (r.total_iterations >= 0 ? r.total_iterations : r.iterations) << '\n';
   os.flush();
 }
 
@@ -160,6 +161,7 @@ void recordAnswer(const BenchProblem& bp, const lcs::core::SolveResult& result, 
   row->status = lcs::core::statusName(result.status);
   row->converged = result.converged;
   row->iterations = result.iterations;
+  row->total_iterations = result.total_iterations;
   row->residual = result.residual;
   row->path = result.solver;
   // The independent recomputation must agree with the core's own report.
@@ -231,7 +233,7 @@ std::string fmt(double v) {
 
 void writeHeader(std::ostream& os) {
   os << "family,problem,contacts,rows,solver,setting,tolerance,status,converged,iterations,"
-        "time_s,time_min_s,repeats,residual,model_residual,peer_error,path\n";
+        "time_s,time_min_s,repeats,residual,model_residual,peer_error,path,total_iterations\n";
 }
 
 const std::vector<Row>& writtenRows() { return g_rows; }

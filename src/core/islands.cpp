@@ -411,10 +411,12 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
   if (slowest != worst) out.stages = slowest->report.stages;
   out.message = globalContactNames(out.message, worst->contacts);
   bool friction_model_set = false;
+  out.total_iterations = 0;
   for (const Island& isl : islands_) {
     lambda(isl.rows) = isl.lambda;
     out.solver_error = std::max(out.solver_error, isl.report.solver_error);
     out.iterations = std::max(out.iterations, isl.report.iterations);
+    out.total_iterations += isl.report.iterations;
     if (!friction_model_set && isl.ctx.hasFriction()) {
       out.friction_model = isl.report.friction_model;
       friction_model_set = true;

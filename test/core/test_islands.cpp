@@ -127,7 +127,8 @@ TEST(Islands, IslandProblemKeepsTheRowsOfItsContacts) {
 }
 
 // A fixed number of sweeps (tolerance out of reach): each island's Gauss-Seidel iterates
-// are the whole problem's, whose other islands contribute exact zeros.
+// are the whole problem's, whose other islands contribute exact zeros. The work reported is
+// those sweeps on every island (iterations: the most one island took).
 TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
   for (bool sparse : {false, true}) {
     for (SolverKind kind : {SolverKind::kNlgs, SolverKind::kPgs}) {
@@ -138,6 +139,10 @@ TEST(Islands, GaussSeidelSweepsEqualTheWholeProblem) {
       const SolveResult split = solveProblem(p, paramsFor(kind, 1e-300, 37, true));
       EXPECT_EQ(whole.iterations, 37);
       EXPECT_EQ(split.iterations, 37);
+      EXPECT_EQ(whole.total_iterations, 37);
+      const int islands = findIslands(p).count();
+      ASSERT_GT(islands, 1);
+      EXPECT_EQ(split.total_iterations, 37 * islands);
       EXPECT_LE(maxDiff(whole.forces, split.forces), 1e-12)
           << solverName(kind) << (sparse ? " sparse" : " dense");
       EXPECT_LE(maxDiff(whole.d, split.d), 1e-12);

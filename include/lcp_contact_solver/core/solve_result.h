@@ -41,8 +41,11 @@ struct SolveResult {
   SolveStatus status = SolveStatus::kInvalidInput;
   bool converged = false;
   // Sweeps (pgs, nlgs), pivots (lemke), iterations (apgd), nlgs sweeps + Newton steps
-  // (newton); summed over maxF re-solves.
+  // (newton); summed over maxF re-solves. On a problem solved by islands, the most any island
+  // took (the islands run side by side).
   int iterations = 0;
+  // The work: `iterations` summed over the islands too (equal to it on a problem solved whole).
+  int total_iterations = 0;
   int resolves = 0;  // extra solves triggered by maxF
   // The solver's own stopping measure at exit (the residual of the problem it solved: for
   // a pyramid friction model, the pyramid's natural-map residual).
