@@ -261,7 +261,6 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   const int threads = params_.threads > 0 ? params_.threads : defaultThreadCount();
   const auto kernel = [kind](const SolveContext& c, Eigen::VectorXd& l) { return runKernel(kind, c, l); };
   KernelReport report;
-  report.total_iterations = 0;
   // maxF: drop the contacts above the limit and solve the rest again, so the remaining
   // forces are consistent with the contacts that are left. Each pass drops at least one
   // contact, so this ends.
@@ -273,7 +272,7 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
     report.message = pass.message;
     report.solver_error = pass.solver_error;
     report.iterations += pass.iterations;
-    report.total_iterations += pass.total_iterations >= 0 ? pass.total_iterations : pass.iterations;
+    report.total_iterations += islands ? pass.total_iterations : pass.iterations;
     report.history.insert(report.history.end(), pass.history.begin(), pass.history.end());
     report.friction_model = pass.friction_model;
     if (result.stages.empty()) {

@@ -81,7 +81,7 @@ struct SolveContext {
 struct KernelReport {
   SolveStatus status = SolveStatus::kMaxIterations;
   int iterations = 0;
-  int total_iterations = -1;    // islands: `iterations` summed over them (-1: one problem, the same)
+  int total_iterations = 0;     // IslandSolver only: `iterations` summed over the islands
   double solver_error = 0.0;    // the kernel's own stopping measure at exit
   std::string message;          // detail for failures
   std::vector<double> history;  // residual per iteration when params->displayDebug
