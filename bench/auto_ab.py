@@ -9,12 +9,13 @@ over them: this machine's speed drifts by up to 1.6x within minutes, so alternat
 
 STUDY.csv is a full study (every solver): a cell's regret there (auto / fastest own, the
 median time, as in the regret table) times the variant's time ratio estimates the variant's
-regret where auto's work changed (below); where it did not, the ratio is the noise between the runs and the regret is kept. Printed: per
-tolerance the geometric mean of the time ratios over all cells and over the changed ones,
-and the cells above 1.5x before and after; every changed cell; the spread of the ratio over
-the unchanged cells. The work compared is auto's path and iterations, both the slowest
-island's on a problem solved by islands, and the iterations summed over the islands
-(total_iterations; CSVs from before that column hide a change on the other islands).
+regret where auto's work changed (below); where it did not, the ratio is the noise between
+the runs and the regret is kept. Printed: per tolerance the geometric mean of the time
+ratios over all cells and over the changed ones, and the cells above 1.5x before and after;
+every changed cell; the spread of the ratio over the unchanged cells. The work compared is
+auto's path and iterations, both the slowest island's on a problem solved by islands, and
+the iterations summed over the islands (total_iterations; CSVs from before that column hide
+a change on the other islands).
 """
 import collections
 import csv
@@ -23,25 +24,20 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from auto_regret_families import ratios, reached  # noqa: E402
-
-TOLS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+from auto_regret_families import reached  # noqa: E402
+from regret_reproducibility import TOLS, quantile, regrets  # noqa: E402
 
 
 def study_regrets(path):
+    """(problem, tolerance) -> auto / fastest own, the regret table's (median times)."""
     rows = list(csv.DictReader(open(path)))
-    out = {}
-    for fam in sorted({r["family"] for r in rows}):
-        for tol in TOLS:
-            for problem, c in ratios(rows, fam, tol).items():
-                if "auto" in c and "own" in c:
-                    out[(problem, tol)] = c["auto"] / c["own"]
-    return out
+    return {(problem, tol): r[0] for (_, problem, tol), r in regrets(rows, "time_s").items()}
 
 
 def pooled(paths):
-    """(problem, tolerance) -> (fastest time over the runs, path, iterations), or None where a
-    run did not reach the tolerance."""
+    """(problem, tolerance) -> (fastest time over the runs, path, work), or None where a run
+    did not reach the tolerance. The work: the slowest island's iterations, then (newer CSVs)
+    "/" and all islands'."""
     out = {}
     for path in paths.split(","):
         for r in csv.DictReader(open(path)):
@@ -54,13 +50,9 @@ def pooled(paths):
             elif out.get(key, 0) is not None:
                 t = float(r["time_min_s"])
                 if key not in out or t < out[key][0]:
-                    # the work: the path, the slowest island's iterations and (newer CSVs) all islands'
-                    out[key] = (t, r["path"], r["iterations"] + "/" + r.get("total_iterations", ""))
+                    total = r.get("total_iterations") or ""
+                    out[key] = (t, r["path"], r["iterations"] + ("/" + total if total else ""))
     return out
-
-
-def quantile(v, q):
-    return v[min(len(v) - 1, int(q * len(v)))]
 
 
 def main(study, base_runs, variant_runs):
