@@ -3,6 +3,8 @@
 // and the per-solve time budget.
 #include "solvers_test_util.h"
 
+#include <thread>
+
 namespace lcp_contact_solver::core {
 namespace {
 
@@ -247,6 +249,68 @@ TEST(Newton, StepsSolveTheLinearisationOnSmallAndLargeSystems) {
     EXPECT_EQ(r.status, SolveStatus::kConverged) << r.message;
     EXPECT_LE(r.residual, 1e-12);
     expectFinite(r);
+  }
+}
+
+// A block-tridiagonal W (each contact coupled to its neighbours: 3 block rows of `contacts`
+// stored, below the quarter that would make newton gather it dense) with every normal pressed
+// and large tangential free velocities, so that contacts slide and newton takes its Newton
+// steps on the sparse LU. The pattern depends on `contacts` only, the values on `seed`.
+Problem slidingChainProblem(int contacts, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 3 * contacts;
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int c = 0; c < contacts; ++c)
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) {
+        J(3 * c + r, 3 * c + k) = u(rng);
+        if (c + 1 < contacts) J(3 * c + r, 3 * (c + 1) + k) = u(rng);
+      }
+  Problem dense;
+  for (int c = 0; c < contacts; ++c) dense.contacts.push_back(Contact{200 + c, ContactType::kFrictional, 3, 0.3});
+  dense.W = Eigen::MatrixXd(J * J.transpose() + 1e-3 * Eigen::MatrixXd::Identity(n, n));
+  dense.d_free.resize(n);
+  for (int c = 0; c < contacts; ++c) {
+    dense.d_free[3 * c] = -0.5 - 0.5 * std::abs(u(rng));
+    dense.d_free[3 * c + 1] = 2.0 * u(rng);
+    dense.d_free[3 * c + 2] = 2.0 * u(rng);
+  }
+  // Only the blocks J Jᵀ can fill: the diagonal and the two next to it.
+  Problem sparse = dense;
+  const std::vector<int> sizes(contacts, 3);
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
+  for (int i = 0; i < contacts; ++i) {
+    B.beginRow();
+    for (int j = std::max(0, i - 1); j <= std::min(contacts - 1, i + 1); ++j)
+      B.addBlock(j, std::get<Eigen::MatrixXd>(dense.W).block(3 * i, 3 * j, 3, 3));
+  }
+  sparse.W = B;
+  return sparse;
+}
+
+// newton and prox keep the sparse LU's pattern and ordering for the next solve on the same
+// block pattern (newton.cpp, SparseSystem::matches). A solve after one on other values of
+// that pattern must factor its own values: its answer is the one a fresh thread (no kept
+// system) returns, and meets the tolerance recomputed from W and d_free.
+TEST(Newton, SparsePatternKeptFromTheLastSolveFactorsTheNewValues) {
+  const Problem first = slidingChainProblem(20, 11u);
+  const Problem second = slidingChainProblem(20, 12u);
+  ASSERT_EQ(std::get<BlockSparseMatrix>(first.W).block_col, std::get<BlockSparseMatrix>(second.W).block_col);
+  for (SolverKind kind : {SolverKind::kNewton, SolverKind::kProx}) {
+    SCOPED_TRACE(solverName(kind));
+    const SolverParams params = tight(kind, 1e-10);
+    SolveResult alone;
+    std::thread([&] { alone = solveProblem(second, params); }).join();
+    const SolveResult before = solveProblem(first, params);
+    const SolveResult after = solveProblem(second, params);
+    ASSERT_EQ(alone.status, SolveStatus::kConverged) << alone.message;
+    EXPECT_EQ(before.status, SolveStatus::kConverged) << before.message;
+    EXPECT_EQ(after.status, SolveStatus::kConverged) << after.message;
+    EXPECT_EQ(after.iterations, alone.iterations);
+    EXPECT_TRUE(after.forces.isApprox(alone.forces, 1e-12));
+    EXPECT_LE(recomputedResidual(second, after.forces), 1e-10);
+    EXPECT_GT((after.forces - before.forces).norm(), 1e-3);  // the two problems' answers differ
   }
 }
 
