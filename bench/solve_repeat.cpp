@@ -5,9 +5,10 @@
 // a microsecond solve at one of two speeds, switching every few seconds). Prints, per solver,
 // the best round's time per solve and the answer's status, iterations, residual and path.
 // With --between OTHER, each timed solve follows an untimed solve of another problem by the
-// same solver (at most 30 iterations), so that nothing a kernel keeps per thread from its last solve (newton's sparse LU
-// pattern, SparseSystem::matches) is of this problem: the time of a solve whose contacts
-// changed since the last step, where the plain repetition times a scene whose contacts did not.
+// same solver (at most 30 iterations), so that nothing a kernel keeps per thread from its last
+// solve (newton's sparse LU pattern, SparseSystem::matches) is of this problem: the time of a
+// solve whose contacts changed since the last step, where the plain repetition times a scene
+// whose contacts did not.
 //   solve_repeat FILE [--tolerance T] [--solvers auto,newton,apgd] [--solves N] [--rounds R]
 //                [--between OTHER]
 #include "lcp_contact_solver/core/contact_solver.h"

@@ -252,10 +252,11 @@ TEST(Newton, StepsSolveTheLinearisationOnSmallAndLargeSystems) {
   }
 }
 
-// A block-tridiagonal W (each contact coupled to its neighbours: 3 block rows of `contacts`
-// stored, below the quarter that would make newton gather it dense) with every normal pressed
-// and large tangential free velocities, so that contacts slide and newton takes its Newton
-// steps on the sparse LU. The pattern depends on `contacts` only, the values on `seed`.
+// A block-tridiagonal W (each contact coupled to its two neighbours: at most 3 of a block
+// row's blocks stored, below the quarter that would make newton gather it dense) with every
+// normal pressed and large tangential free velocities, so that contacts slide and newton takes
+// its Newton steps on the sparse LU. The pattern depends on `contacts` only, the values on
+// `seed`.
 Problem slidingChainProblem(int contacts, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
