@@ -168,16 +168,27 @@ Islands findIslands(const Problem& problem) {
           sets.unite(first_contact[b], i);
       }
   } else if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
+    // Pair by pair, values read only across islands (as below): on a W that couples
+    // everything (a MuJoCo cloth's 265 rows) the entry-by-entry pass cost 60 % of the
+    // Gauss-Seidel solve after it. W need not be symmetric: both blocks of a pair are read.
     const std::vector<int> offsets = problem.rowOffsets();
-    std::vector<int> contact_of(offsets.back());
-    for (int i = 0; i < nc; ++i)
-      std::fill(contact_of.begin() + offsets[i], contact_of.begin() + offsets[i + 1], i);
-    const int n = static_cast<int>(dense->rows());
-    for (int c = 0; c < n; ++c) {
-      const double* col = dense->data() + static_cast<std::ptrdiff_t>(c) * n;
-      const int cc = contact_of[c];
-      for (int r = 0; r < n; ++r)
-        if (col[r] != 0.0 && contact_of[r] != cc) sets.unite(contact_of[r], cc);  // one pass over W
+    const Eigen::Index n = dense->rows();
+    auto nonzero = [&](int i, int j) {  // W's block (rows of i, columns of j) has a nonzero
+      for (int c = offsets[j]; c < offsets[j + 1]; ++c) {
+        const double* col = dense->data() + static_cast<std::ptrdiff_t>(c) * n;
+        for (int r = offsets[i]; r < offsets[i + 1]; ++r)
+          if (col[r] != 0.0) return true;
+      }
+      return false;
+    };
+    for (int j = 0; j < nc; ++j) {
+      int root_j = sets.find(j);  // kept current along the column: one find per pair
+      for (int i = j + 1; i < nc; ++i) {
+        const int root_i = sets.find(i);
+        if (root_i == root_j || !(nonzero(i, j) || nonzero(j, i))) continue;
+        sets.parent[std::max(root_i, root_j)] = std::min(root_i, root_j);
+        root_j = std::min(root_i, root_j);
+      }
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
     for (int i = 0; i < sparse->blockCount(); ++i) {

@@ -104,6 +104,62 @@ TEST(Islands, FindsTheGroupsOfInterleavedContacts) {
   }
 }
 
+// Random couplings, some in one triangle of W only (a non-symmetric W): the islands are the
+// connected components of the graph whose edges are W's nonzero blocks, found here by a
+// breadth-first search, one entry at a time, independent of findIslands' pair-wise pass.
+TEST(Islands, MatchAGraphSearchOverTheNonzeroBlocks) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int nc = 2 + static_cast<int>(rng() % 30);
+    Problem p;
+    for (int i = 0; i < nc; ++i) {
+      Contact c;
+      c.type = rng() % 3 == 0 ? ContactType::kFrictionless : ContactType::kFrictional;
+      c.rows = c.type == ContactType::kFrictionless ? 1 : 3;
+      c.mu = 0.5;
+      p.contacts.push_back(c);
+    }
+    const std::vector<int> off = p.rowOffsets();
+    const int n = off.back();
+    Eigen::MatrixXd W = Eigen::MatrixXd::Identity(n, n);
+    const double density = 0.02 + 0.1 * (trial % 4);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nc; ++j)
+        if (i != j && u(rng) < density)  // one entry of block (i, j): maybe not of (j, i)
+          W(off[i] + static_cast<int>(rng() % p.contacts[i].rows), off[j] + static_cast<int>(rng() % p.contacts[j].rows)) = 0.1;
+    p.W = W;
+    p.d_free = Eigen::VectorXd::Zero(n);
+    std::vector<int> component(nc, -1);
+    int components = 0;
+    for (int s = 0; s < nc; ++s) {
+      if (component[s] >= 0) continue;
+      std::vector<int> queue{s};
+      component[s] = components;
+      for (std::size_t q = 0; q < queue.size(); ++q)
+        for (int r = 0; r < n; ++r)
+          for (int c = 0; c < n; ++c) {
+            if (W(r, c) == 0.0) continue;
+            const int a = static_cast<int>(std::upper_bound(off.begin(), off.end(), r) - off.begin()) - 1;
+            const int b = static_cast<int>(std::upper_bound(off.begin(), off.end(), c) - off.begin()) - 1;
+            const int other = a == queue[q] ? b : b == queue[q] ? a : -1;
+            if (other >= 0 && component[other] < 0) {
+              component[other] = components;
+              queue.push_back(other);
+            }
+          }
+      ++components;
+    }
+    for (const Problem& form : {p, hard::toBlockSparse(p)}) {
+      const Islands islands = findIslands(form);
+      ASSERT_EQ(islands.count(), components) << "trial " << trial;
+      for (int i = 0; i < nc; ++i)
+        for (int j = 0; j < nc; ++j)
+          EXPECT_EQ(islands.island_of[i] == islands.island_of[j], component[i] == component[j]) << "trial " << trial;
+    }
+  }
+}
+
 TEST(Islands, OneGroupIsOneIsland) {
   Generated g = generate(1, 12, Kinds::kFrictional, 4);
   EXPECT_EQ(findIslands(g.problem).count(), 1);
