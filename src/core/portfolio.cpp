@@ -321,15 +321,17 @@ struct CouplingScratch {
   std::vector<double> active_weight;  // 1 or 0 (ignored): the LCP loop below without branches
   // Which contacts each contact is coupled to, as an order-free hash of the set and its size.
   std::vector<CouplingSet> coupled, sets;
+  std::vector<int> members;  // the contacts whose sets are read: active, not bilateral
 };
 [[gnu::noinline]] CouplingScratch& couplingScratch() {
   thread_local CouplingScratch scratch;
   return scratch;
 }
 
-// `redundancy`: also the share of nearly parallel normals and of multi-point contacts (only
-// the frictional plan reads them).
-Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
+// `redundancy`: also the share of nearly parallel normals (only the frictional plan reads it),
+// and with `sets` that of multi-point contacts (an order-free hash per coupled pair), with
+// `sets_only` that alone on a dense W (the rest left out of the result).
+Coupling normalCoupling(const SolveContext& ctx, bool redundancy, bool sets, bool sets_only = false) {
   const Problem& p = *ctx.problem;
   const int nc = static_cast<int>(p.contacts.size());
   CouplingScratch& work = couplingScratch();
@@ -337,27 +339,56 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
   std::vector<char>& redundant = work.redundant;
   std::vector<double>& active_weight = work.active_weight;
   std::vector<CouplingSet>& coupled = work.coupled;
-  scratch.assign(3 * static_cast<std::size_t>(nc), 0.0);
+  scratch.assign(4 * static_cast<std::size_t>(nc), 0.0);
   redundant.assign(redundancy ? nc : 0, 0);
-  coupled.assign(redundancy ? nc : 0, CouplingSet{});
+  sets = sets && redundancy;
+  coupled.assign(sets ? nc : 0, CouplingSet{});
+  std::vector<int>& members = work.members;  // multiPointShare reads only their sets
+  members.clear();
+  if (sets)
+    for (int i = 0; i < nc; ++i)
+      if (!ctx.ignored[i] && p.contacts[i].type != ContactType::kBilateral) members.push_back(i);
   active_weight.resize(nc);
   for (int i = 0; i < nc; ++i) active_weight[i] = ctx.ignored[i] ? 0.0 : 1.0;
   double* diag = scratch.data();
   double* off_sum = diag + nc;
   double* lower_sum = off_sum + nc;
+  double* positive_diag = lower_sum + nc;  // W_ii where positive, else infinite (below)
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  for (int i = 0; i < nc; ++i) diag[i] = ctx.normalDiagonal(i);
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < nc; ++i) {
+    diag[i] = ctx.normalDiagonal(i);
+    positive_diag[i] = diag[i] > 0.0 ? diag[i] : kInfinity;
+  }
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (j < i) lower_sum[i] += std::abs(w);
-    if (redundancy && (w != 0.0 || !dense)) coupled[i].add(j);  // a stored block couples
+    if (sets && p.contacts[i].type != ContactType::kBilateral && (w != 0.0 || !dense))
+      coupled[i].add(j);  // a stored block couples
     // |w| >= kAutoRedundant √(W_ii W_jj), squared: no square root per pair of a dense W.
     if (redundancy && diag[i] > 0.0 && diag[j] > 0.0 &&
         w * w >= kAutoRedundant * kAutoRedundant * diag[i] * diag[j])
       redundant[i] = 1;
   };
+  const int* offsets = ctx.offsets.data();
+  // One column j of a dense frictional W: the LCP's loops below, and the nearly parallel
+  // normals among them (visit's test, false as there where a diagonal is not positive: it is
+  // infinite here). visit's branches per pair cost a third of the sweeps on a MuJoCo soft
+  // body's 679 entries.
+  auto pairs = [&](int j, const double* column) {
+    const double parallel_j = diag[j] > 0.0 ? kAutoRedundant * kAutoRedundant * diag[j] : kInfinity;
+    auto range = [&](int from, int to, bool lower) {
+      for (int i = from; i < to; ++i) {
+        const double w = active_weight[i] * std::abs(column[offsets[i]]);
+        off_sum[i] += w;
+        if (lower) lower_sum[i] += w;
+        redundant[i] |= static_cast<char>(w * w >= parallel_j * positive_diag[i]);
+      }
+    };
+    range(0, j, false);
+    range(j + 1, nc, true);
+  };
   if (dense) {
-    const int* offsets = ctx.offsets.data();
     for (int j = 0; j < nc; ++j) {
       if (active_weight[j] == 0.0) continue;
       const double* column = dense->data() + static_cast<std::ptrdiff_t>(offsets[j]) * dense->rows();
@@ -370,8 +401,11 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
         }
         continue;
       }
-      for (int i = 0; i < nc; ++i)
-        if (i != j && active_weight[i] != 0.0) visit(i, j, column[offsets[i]]);
+      // Frictional. The coupling sets, a hash per coupled pair, apart and only for the
+      // members (a soft body's 28 contacts among its 651 joint rows).
+      if (!sets_only) pairs(j, column);
+      for (int i : members)
+        if (i != j && column[offsets[i]] != 0.0) coupled[i].add(j);
     }
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&p.W)) {
     for (int i = 0; i < sparse->blockCount() && i < nc; ++i) {
@@ -404,7 +438,7 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy) {
     c.kappa = sum / active;
     c.gs_bound = gs_bound;
     c.redundant = contacts > 0 ? static_cast<double>(repeated) / contacts : 0.0;
-    if (redundancy) c.multi_point = multiPointShare(ctx, coupled, work.sets, active, contacts);
+    if (sets) c.multi_point = multiPointShare(ctx, coupled, work.sets, active, contacts);
   }
   return c;
 }
@@ -460,6 +494,12 @@ double denseSymmetricCoupling(const SolveContext& ctx, const Eigen::MatrixXd& W,
   return active > 0 ? sum / active : 0.0;
 }
 
+// A frictional plan that starts with Gauss-Seidel whatever the tolerance (autoPlan, below):
+// block-sparse or dense above kAutoNewtonRows rows, a moderate coupling, no rank deficiency.
+bool firstOrderBySize(const AutoFeatures& f) {
+  return (f.sparse || f.rows > kAutoNewtonRows) && f.coupling < kAutoSparseGs && !f.rank_deficient;
+}
+
 // A dense LCP's W is compared for symmetry (a non-symmetric one usually at its first pair); a
 // block-sparse W is assembled (J M⁻¹ Jᵀ: scenes, MuJoCo's efc_AR) and presumed symmetric:
 // comparing every island's blocks cost as much as newton's whole solve on MuJoCo's steps, and
@@ -486,8 +526,12 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
       return f;
     }
   }
+  // Above the small size the multi-point share is measured only where the plan reads it,
+  // in a second pass (firstOrderBySize): the coupling sets' hashing cost 15 % of the
+  // Gauss-Seidel solve after it on a MuJoCo cloth's dense 265 rows.
+  const bool one_pass = !f.sparse && f.rows <= kAutoNewtonRows;
   if (!f.body_form) {
-    const Coupling c = normalCoupling(ctx, friction);
+    const Coupling c = normalCoupling(ctx, friction, one_pass);
     f.coupling = c.kappa;
     f.gs_bound = c.gs_bound;
     f.positive_diagonal = c.positive_diagonal;
@@ -495,6 +539,8 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.multi_point = c.multi_point >= kAutoRedundantShare;
   }
   if (body_dof > 0) f.rank_deficient = f.rank_deficient || activeRows(ctx).all > body_dof;
+  if (!f.body_form && friction && !one_pass && !firstOrderBySize(f))
+    f.multi_point = normalCoupling(ctx, friction, true, true).multi_point >= kAutoRedundantShare;
   return f;
 }
 
@@ -541,8 +587,7 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
   // Gauss-Seidel first at any tolerance and size; so too a dense W above kAutoNewtonRows,
   // where the plan is first-order either way and a sweep, like an apgd iteration, is one pass
   // over W whatever its storage (a MuJoCo W stored dense because it is full).
-  if ((f.sparse || f.rows > kAutoNewtonRows) && f.coupling < kAutoSparseGs && !f.rank_deficient)
-    return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+  if (firstOrderBySize(f)) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   // Between the first-order methods: Gauss-Seidel's early sweeps are its fast ones, so it goes
   // first down to kAutoModerateTolerance unless W is rank-deficient or has multi-point contacts,
   // where its rate collapses and apgd's momentum wins (box pyramids at 1e-4: apgd 5-11x faster;
