@@ -360,23 +360,23 @@ Coupling normalCoupling(const SolveContext& ctx, bool redundancy, bool sets, boo
     diag[i] = ctx.normalDiagonal(i);
     positive_diag[i] = diag[i] > 0.0 ? diag[i] : kInfinity;
   }
+  // Rows i and j nearly parallel: |w| >= kAutoRedundant √(W_ii W_jj), squared (no square
+  // root per pair of a dense W), as w² >= parallelTo(j) · positive_diag[i]: false wherever a
+  // diagonal is not positive, one of the two factors being infinite.
+  auto parallelTo = [&](int j) { return diag[j] > 0.0 ? kAutoRedundant * kAutoRedundant * diag[j] : kInfinity; };
   auto visit = [&](int i, int j, double w) {
     off_sum[i] += std::abs(w);
     if (j < i) lower_sum[i] += std::abs(w);
     if (sets && p.contacts[i].type != ContactType::kBilateral && (w != 0.0 || !dense))
       coupled[i].add(j);  // a stored block couples
-    // |w| >= kAutoRedundant √(W_ii W_jj), squared: no square root per pair of a dense W.
-    if (redundancy && diag[i] > 0.0 && diag[j] > 0.0 &&
-        w * w >= kAutoRedundant * kAutoRedundant * diag[i] * diag[j])
-      redundant[i] = 1;
+    if (redundancy && w * w >= parallelTo(j) * positive_diag[i]) redundant[i] = 1;
   };
   const int* offsets = ctx.offsets.data();
-  // One column j of a dense frictional W: the LCP's loops below, and the nearly parallel
-  // normals among them (visit's test, false as there where a diagonal is not positive: it is
-  // infinite here). visit per pair, every row's set hashed, had cost a third of the sweeps'
-  // time on MuJoCo's softbox (679 entries, 651 of them joint rows).
+  // One column j of a dense frictional W: the LCP's loops below, and visit's parallel test
+  // without its branches (visit per pair, every row's set hashed, had cost a third of the
+  // sweeps' time on MuJoCo's softbox: 679 entries, 651 of them joint rows).
   auto pairs = [&](int j, const double* column) {
-    const double parallel_j = diag[j] > 0.0 ? kAutoRedundant * kAutoRedundant * diag[j] : kInfinity;
+    const double parallel_j = parallelTo(j);
     auto range = [&](int from, int to, bool lower) {
       for (int i = from; i < to; ++i) {
         const double w = active_weight[i] * std::abs(column[offsets[i]]);
