@@ -202,18 +202,28 @@ double iterationsToReach(double tolerance, double from, double to, int iteration
   return std::log(tolerance / to) / std::log(per_iteration);
 }
 
-// After the probe's first stage, newton's sticking active-set path (newton_symmetric.h) is
-// tried where it applies (W assembled, gathered dense) when the probe's iterate says every
-// contact sticks (a scene at rest) and Gauss-Seidel would need more sweeps than the path's
-// Cholesky steps cost: n³/3 flops against a sweep's n², i.e. n/3 sweeps, and at least
+// After a Gauss-Seidel run (the probe's first stage, and any later stage, trial window or
+// slice that lowered the residual), newton's sticking active-set path (newton_symmetric.h) is
+// tried once per solve where it applies (W assembled, gathered dense) when the iterate says
+// every contact sticks (a scene at rest) and Gauss-Seidel would need more sweeps than the
+// path costs. One Cholesky of n rows is n³/3 flops against a sweep's 2 × (W's stored entries):
+// n/6 sweeps on a dense W, more on a sparse one gathered dense; the path takes one or two
+// steps, and its blocked factorization runs about twice as fast per flop as a sweep (MuJoCo's
+// softbox, 735 dense rows: one step 10-12 ms, a sweep 0.17 ms), so n/6 covers both. At least
 // kAutoStickFixedSweeps for its set-up on small problems. The sweeps needed are twice what
-// the probe's rate says, as for the probe's own stages. Where a contact slides after all,
-// the plan goes on from the probe's iterate.
+// the run's rate says, as for the probe's own stages. Where a contact slides after all, the
+// solve goes on from the Gauss-Seidel iterate. (Tried after the probe's first stage only, the
+// path was missed where those sweeps raised the residual: the softbox's joints, 1.0 → 1.4.)
 constexpr double kAutoStickFixedSweeps = 10.0;
 constexpr int kAutoStickWarmRows = 128;  // a warm start that sticks: tried first up to this size
+double stickingCostSweeps(const SolveContext& ctx) {
+  const double n = ctx.problem->rowCount();
+  const auto* sparse = std::get_if<BlockSparseMatrix>(&ctx.problem->W);
+  const double stored = sparse ? std::max<double>(1.0, sparse->values.size()) : n * n;
+  return std::max(kAutoStickFixedSweeps, n * n * n / 3.0 / (2.0 * stored));
+}
 bool stickingPays(const SolveContext& ctx, const Eigen::VectorXd& lambda, double needed_sweeps) {
-  const double cost = std::max(kAutoStickFixedSweeps, ctx.problem->rowCount() / 3.0);
-  return 2.0 * needed_sweeps > cost && stickingPathApplies(ctx) && allSticking(ctx, lambda);
+  return 2.0 * needed_sweeps > stickingCostSweeps(ctx) && stickingPathApplies(ctx) && allSticking(ctx, lambda);
 }
 
 struct AutoFeatures {
@@ -984,6 +994,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           "auto: maxIt (" + std::to_string(params.maxIt) + ") iterations over every member reached";
       break;
     }
+    // A Gauss-Seidel member's iterate that sticks everywhere: the sticking path (stickingPays).
+    if (gauss_seidel && friction && by_residual && !sticking_tried && r.iterations > 0 && !failedToRun(r.status) &&
+        best_residual < start_residual &&
+        stickingPays(ctx, best, iterationsToReach(params.tolerance, start_residual, best_residual, r.iterations)) &&
+        stickingPathSolves())
+      break;
     if (saved_slice > 0 && !failedToRun(r.status)) continue;  // a trial window is no slice: no stall test
     if (cur.scout) {
       // Go on while the rate of its last slice (the first: from the start) reaches the
@@ -1020,7 +1036,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       const double needed = r.iterations > 0 && best_residual < stage_start
                                 ? iterationsToReach(params.tolerance, stage_start, best_residual, r.iterations)
                                 : std::numeric_limits<double>::infinity();
-      if (probe_sweeps == 0 && friction && !sticking_tried && !failedToRun(r.status) &&
+      if ((probe_sweeps == 0 || std::isfinite(needed)) && friction && !sticking_tried && !failedToRun(r.status) &&
           stickingPays(ctx, best, needed) && stickingPathSolves())
         break;
       // Gauss-Seidel's first sweeps from the start can raise the residual while the iterate is
