@@ -216,6 +216,10 @@ double iterationsToReach(double tolerance, double from, double to, int iteration
 // path was missed where those sweeps raised the residual: the softbox's joints, 1.0 → 1.4.)
 constexpr double kAutoStickFixedSweeps = 10.0;
 constexpr int kAutoStickWarmRows = 128;  // a warm start that sticks: tried first up to this size
+// W_AA gathered dense for the path up to this size whatever W's fill (8 MB): the cost above
+// counts the dense flops against the sweeps' (MuJoCo's active_adhesion, a 206-row island 19 %
+// full, 194 of its rows bilateral: 124 iterations at 1e-8 where Gauss-Seidel took 302).
+constexpr int kAutoStickDenseRows = 1024;
 double stickingCostSweeps(const SolveContext& ctx) {
   const double n = ctx.problem->rowCount();
   const auto* sparse = std::get_if<BlockSparseMatrix>(&ctx.problem->W);
@@ -223,7 +227,8 @@ double stickingCostSweeps(const SolveContext& ctx) {
   return std::max(kAutoStickFixedSweeps, n * n * n / 3.0 / (2.0 * stored));
 }
 bool stickingPays(const SolveContext& ctx, const Eigen::VectorXd& lambda, double needed_sweeps) {
-  return 2.0 * needed_sweeps > stickingCostSweeps(ctx) && stickingPathApplies(ctx) && allSticking(ctx, lambda);
+  return 2.0 * needed_sweeps > stickingCostSweeps(ctx) && stickingPathApplies(ctx, kAutoStickDenseRows) &&
+         allSticking(ctx, lambda);
 }
 
 struct AutoFeatures {
@@ -860,7 +865,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     member.deadline = ctx.deadline;
     KernelReport stick;
     x = best;
-    const bool solved = solveStickingActiveSet(member, x, &stick);
+    const bool solved = solveStickingActiveSet(member, x, &stick, kAutoStickDenseRows);
     stages->emplace_back("active-set", std::chrono::duration<double>(Clock::now() - s0).count());
     used += stick.iterations;
     if (!solved) return false;

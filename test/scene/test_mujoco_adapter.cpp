@@ -21,6 +21,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <variant>
 
 using namespace lcp_contact_solver;
 using namespace lcp_contact_solver::scene;
@@ -31,6 +32,7 @@ const std::string kModels = LCS_MUJOCO_MODEL_DIR;
 const std::string kHumanoid = kModels + "/humanoid/humanoid.xml";
 const std::string kParticle = kModels + "/composite/particle.xml";
 const std::string kSoftbox = kModels + "/composite/softbox.xml";
+const std::string kAdhesion = kModels + "/adhesion/active_adhesion.xml";
 
 bool haveModel(const std::string& path) { return std::ifstream(path).good(); }
 
@@ -71,11 +73,11 @@ core::SolverParams params(core::SolverKind kind, double tolerance, int max_it) {
   return p;
 }
 
-// The softbox (elliptic cones) after `steps` of MuJoCo's own solver: the problem of the next.
-void softboxAt(int steps, MujocoProblem* mp) {
+// A model (elliptic cones) after `steps` of MuJoCo's own solver: the problem of the next.
+void ellipticAt(const std::string& model, int steps, MujocoProblem* mp) {
   MujocoOptions options;
   options.cone = "elliptic";
-  auto world = loadWorld(kSoftbox, options);
+  auto world = loadWorld(model, options);
   ASSERT_TRUE(world);
   for (int s = 0; s < steps; ++s) {
     forwardToConstraints(world->model(), world->data(), /*run_solver=*/true);
@@ -290,7 +292,7 @@ TEST(MujocoCrossCheck, AFullWStaysDenseWhateverItsSize) {
 TEST(MujocoCrossCheck, AutoDoesNotCrawlOnASoftBody) {
   if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
   MujocoProblem mp;
-  ASSERT_NO_FATAL_FAILURE(softboxAt(300, &mp));
+  ASSERT_NO_FATAL_FAILURE(ellipticAt(kSoftbox, 300, &mp));
   int frictional = 0;
   for (const core::Contact& c : mp.problem.contacts) frictional += c.type == core::ContactType::kFrictional;
   ASSERT_GT(frictional, 0) << "the box should rest on the ground by step 300";
@@ -312,7 +314,7 @@ TEST(MujocoCrossCheck, AutoDoesNotCrawlOnASoftBody) {
 TEST(MujocoCrossCheck, AutoEndsASoftBoxAtRestByTheStickingPath) {
   if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
   MujocoProblem mp;
-  ASSERT_NO_FATAL_FAILURE(softboxAt(1000, &mp));
+  ASSERT_NO_FATAL_FAILURE(ellipticAt(kSoftbox, 1000, &mp));
   const double start = problemResidual(mp, Eigen::VectorXd::Zero(mp.problem.rowCount()));
   const core::SolveResult three = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-12, 3));
   ASSERT_GT(problemResidual(mp, three.forces), start) << "the probe's first sweeps should raise the residual";
@@ -325,6 +327,29 @@ TEST(MujocoCrossCheck, AutoEndsASoftBoxAtRestByTheStickingPath) {
   EXPECT_LE(problemResidual(mp, r.forces), tolerance);
   EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6 * nlgs.forces.cwiseAbs().maxCoeff());
   EXPECT_LT(4 * r.iterations, nlgs.iterations) << r.solver;
+}
+
+// The same on a block-sparse W too sparse for newton's own dense gather: MuJoCo's
+// active_adhesion at step 1000, a 206-row island (194 rows bilateral) under a quarter full.
+// auto weighs the dense Cholesky's flops against its sweeps and takes the path at 1e-8.
+TEST(MujocoCrossCheck, AutoGathersASparseIslandDenseForTheStickingPath) {
+  if (!haveModel(kAdhesion)) GTEST_SKIP() << kAdhesion << " missing (libmujoco-samples)";
+  MujocoProblem mp;
+  ASSERT_NO_FATAL_FAILURE(ellipticAt(kAdhesion, 1000, &mp));
+  const auto* sparse = std::get_if<core::BlockSparseMatrix>(&mp.problem.W);
+  ASSERT_NE(sparse, nullptr);
+  const double rows = mp.problem.rowCount();
+  ASSERT_GT(rows, 128);
+  ASSERT_LT(4.0 * static_cast<double>(sparse->values.size()), rows * rows) << "a quarter full or more";
+  const double tolerance = 1e-8;
+  const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-10, 1000000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 1000000));
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_NE(r.solver.find("->active-set"), std::string::npos) << r.solver;
+  EXPECT_LE(problemResidual(mp, r.forces), tolerance);
+  EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6 * nlgs.forces.cwiseAbs().maxCoeff());
+  EXPECT_LT(2 * r.iterations, nlgs.iterations) << r.solver;
 }
 
 TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {

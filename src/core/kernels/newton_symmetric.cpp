@@ -252,13 +252,13 @@ bool denseSystem(const SolveContext& ctx) {
   return blocks == nullptr || n <= kDenseMaxRows || 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
 }
 
-// W + r I as a system, or null when W is not symmetric to kSymmetryTolerance. A dense one
-// keeps its storage in `dense_scratch`.
-std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx, DenseScratch& dense_scratch) {
+// W + r I as a system, gathered dense or sparse, or null when W is not symmetric to
+// kSymmetryTolerance. A dense one keeps its storage in `dense_scratch`.
+std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx, bool gather_dense, DenseScratch& dense_scratch) {
   const Problem& p = *ctx.problem;
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  if (denseSystem(ctx)) {
+  if (gather_dense) {
     auto system = std::make_unique<DenseReduced>(dense_scratch, n);
     Eigen::Map<Eigen::MatrixXd> W = system->W();
     if (dense != nullptr) {
@@ -328,7 +328,7 @@ struct ActiveSetScratch {
 
 // The active-set iteration of solveSymmetricActiveSet (`stick` false) and
 // solveStickingActiveSet (true).
-bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::VectorXd& lambda,
+bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, int dense_rows, Eigen::VectorXd& lambda,
                      KernelReport* report) {
   const Problem& problem = *ctx.problem;
   const SolverParams& params = *ctx.params;
@@ -336,8 +336,9 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, Eigen::
   ActiveSetScratch& scratch = activeSetScratch();
   std::vector<Role>& roles = scratch.roles;
   if (problem.bodies || !rowRoles(ctx, stick, &roles)) return false;
-  if (stick && !denseSystem(ctx)) return false;  // see stickingPathApplies
-  std::unique_ptr<ReducedSystem> system = makeSystem(ctx, scratch.dense);
+  if (stick && !stickingPathApplies(ctx, dense_rows)) return false;
+  const bool gather_dense = denseSystem(ctx) || (stick && ctx.offsets.back() <= dense_rows);
+  std::unique_ptr<ReducedSystem> system = makeSystem(ctx, gather_dense, scratch.dense);
   if (!system) return false;
   const int n = ctx.offsets.back();
 
@@ -420,7 +421,7 @@ bool symmetricLcp(const SolveContext& ctx) {
 }
 
 bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
-  return activeSetNewton(ctx, false, kMaxSteps, lambda, report);
+  return activeSetNewton(ctx, false, kMaxSteps, 0, lambda, report);
 }
 
 bool allSticking(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
@@ -442,10 +443,12 @@ bool allSticking(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
   return any;
 }
 
-bool stickingPathApplies(const SolveContext& ctx) { return !ctx.problem->bodies && denseSystem(ctx); }
+bool stickingPathApplies(const SolveContext& ctx, int dense_rows) {
+  return !ctx.problem->bodies && (denseSystem(ctx) || ctx.offsets.back() <= dense_rows);
+}
 
-bool solveStickingActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report) {
-  return activeSetNewton(ctx, true, kMaxStickSteps, lambda, report);
+bool solveStickingActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report, int dense_rows) {
+  return activeSetNewton(ctx, true, kMaxStickSteps, dense_rows, lambda, report);
 }
 
 }  // namespace lcp_contact_solver::core

@@ -22,9 +22,11 @@ bool solveSymmetricActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, K
 bool allSticking(const SolveContext& ctx, const Eigen::VectorXd& lambda);
 
 // Where solveStickingActiveSet runs at all: W assembled, and W_AA gathered dense (dense, up
-// to 128 rows, or block-sparse at least a quarter full): a sparse analysis costs more than
-// a failed attempt is worth.
-bool stickingPathApplies(const SolveContext& ctx);
+// to 128 rows or `dense_rows` if more, or block-sparse at least a quarter full): a sparse
+// analysis costs more than a failed attempt is worth. A caller that weighs the dense
+// Cholesky's n³/3 flops against its own work (auto: stickingCostSweeps) passes a larger
+// `dense_rows`; newton, which tries the path unweighed after its warm-up, does not.
+bool stickingPathApplies(const SolveContext& ctx, int dense_rows = 0);
 
 // The active-set iteration with each frictional contact's tangent rows as equalities
 // (u_t = 0) wherever its normal row is active: exact in one step when the set is right and
@@ -32,6 +34,6 @@ bool stickingPathApplies(const SolveContext& ctx);
 // Returns as solveSymmetricActiveSet; false also when a contact's friction leaves its cone,
 // when W_AA is singular (the sticking forces are not unique), and at once where
 // stickingPathApplies is false.
-bool solveStickingActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report);
+bool solveStickingActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport* report, int dense_rows = 0);
 
 }  // namespace lcp_contact_solver::core
