@@ -6,10 +6,13 @@
 //   work_precision [--problems DIR] [--scenes DIR] [--out FILE] [--budget S]
 //                  [--families fc3d,lcp,scenes,mujoco] [--filter SUBSTRING] [--solvers a,b,...]
 //                  [--quick] [--regret FILE] [--mujoco-models a.xml,b.xml,...] [--mujoco-steps 100,300]
+//                  [--sweep-cost FILE]
 //
 // At the end it writes the "auto regret" table (markdown, --regret, default
 // bench/results/auto_regret.md): per problem and tolerance, auto's time over the fastest of
-// our other solvers and over the fastest peer that reached the same residual.
+// our other solvers and over the fastest peer that reached the same residual. With
+// --sweep-cost it times a Gauss-Seidel sweep and a dense Cholesky on each problem instead
+// (sweep_cost.cpp) and writes those to FILE.
 //
 // The parts: work_precision_problems.cpp (what is measured), work_precision_runs.cpp (our
 // solvers and the peers, the CSV), auto_regret_table.cpp (the table).
@@ -59,6 +62,8 @@ int parseOptions(int argc, char** argv, wp::Options* options) {
   CLI::Option* quick =
       app.add_flag("--quick", "a short run: 4 tolerances, small scenes, budget <= 1 s, 1 repeat");
   app.add_option("--regret", opt.regret, "the auto regret table to write (markdown)")->capture_default_str();
+  app.add_option("--sweep-cost", opt.sweep_cost,
+                 "instead of the study: time a sweep and a dense Cholesky per problem, CSV to FILE");
   // Any MuJoCo model can be studied, not only the four the study ships with: a model auto was
   // never tried on is the fairest test of how it decides.
   app.add_option("--mujoco-models", mujoco_models, "the mujoco family's models (comma list of MJCF files)")
@@ -156,6 +161,15 @@ int main(int argc, char** argv) {
   wp::Options opt;
   if (const int code = parseOptions(argc, argv, &opt); code >= 0) return code;
 
+  if (!opt.sweep_cost.empty()) {
+    std::ofstream costs(opt.sweep_cost);
+    if (!costs) {
+      std::cerr << "work_precision: cannot write " << opt.sweep_cost << "\n";
+      return 1;
+    }
+    wp::writeSweepCosts(wp::loadProblems(opt), costs);
+    return 0;
+  }
   std::ofstream csv(opt.out);
   if (!csv) {
     std::cerr << "work_precision: cannot write " << opt.out << "\n";

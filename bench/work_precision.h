@@ -52,6 +52,7 @@ struct Options {
       LCS_MUJOCO_MODEL_DIR "/humanoid/22_humanoids.xml", LCS_MUJOCO_MODEL_DIR "/humanoid100/humanoid100.xml",
       LCS_MUJOCO_MODEL_DIR "/composite/particle.xml", LCS_MUJOCO_MODEL_DIR "/composite/rope.xml"};
   std::vector<int> mujoco_steps = {100, 300};
+  std::string sweep_cost;  // --sweep-cost: the CSV of sweep_cost.cpp, instead of the study
 };
 
 struct BenchProblem {
@@ -93,6 +94,10 @@ struct Row {
 std::vector<BenchProblem> loadProblems(const Options& opt);
 // The steps of MuJoCo's models (work_precision_mujoco.cpp; without MuJoCo, none).
 void addMujocoProblems(const Options& opt, std::vector<BenchProblem>* out);
+
+// ---- sweep_cost.cpp ----
+// Per problem: one Gauss-Seidel sweep's and one dense Cholesky's time, as CSV.
+void writeSweepCosts(const std::vector<BenchProblem>& problems, std::ostream& csv);
 
 // ---- runs (work_precision_runs.cpp) ----
 std::vector<OurSolver> ourSolvers();
