@@ -87,6 +87,20 @@ void ellipticAt(const std::string& model, int steps, MujocoProblem* mp) {
   ASSERT_EQ(extractProblem(world->model(), world->data(), MujocoExtractOptions(), mp), "");
 }
 
+// auto at 1e-8 ends by newton's sticking path (`->active-set`) in under 1/`fewer_by` of nlgs's
+// sweeps; its answer meets the tolerance recomputed from the forces and equals nlgs's at 1e-10.
+void expectAutoEndsByTheStickingPath(const MujocoProblem& mp, int fewer_by) {
+  const double tolerance = 1e-8;
+  const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-10, 1000000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 1000000));
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_NE(r.solver.find("->active-set"), std::string::npos) << r.solver;
+  EXPECT_LE(problemResidual(mp, r.forces), tolerance);
+  EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6 * nlgs.forces.cwiseAbs().maxCoeff());
+  EXPECT_LT(fewer_by * r.iterations, nlgs.iterations) << r.solver;
+}
+
 // Steps `world` with MuJoCo's own solver; calls `check` on every step with rows.
 template <typename F>
 void runCrossCheck(MujocoWorld& world, int steps, const MujocoExtractOptions& options, F&& check) {
@@ -318,15 +332,7 @@ TEST(MujocoCrossCheck, AutoEndsASoftBoxAtRestByTheStickingPath) {
   const double start = problemResidual(mp, Eigen::VectorXd::Zero(mp.problem.rowCount()));
   const core::SolveResult three = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-12, 3));
   ASSERT_GT(problemResidual(mp, three.forces), start) << "the probe's first sweeps should raise the residual";
-  const double tolerance = 1e-8;
-  const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-10, 1000000));
-  ASSERT_TRUE(nlgs.converged) << nlgs.message;
-  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 1000000));
-  ASSERT_TRUE(r.converged) << r.message;
-  EXPECT_NE(r.solver.find("->active-set"), std::string::npos) << r.solver;
-  EXPECT_LE(problemResidual(mp, r.forces), tolerance);
-  EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6 * nlgs.forces.cwiseAbs().maxCoeff());
-  EXPECT_LT(4 * r.iterations, nlgs.iterations) << r.solver;
+  expectAutoEndsByTheStickingPath(mp, 4);
 }
 
 // The same on a block-sparse W too sparse for newton's own dense gather: MuJoCo's
@@ -341,15 +347,7 @@ TEST(MujocoCrossCheck, AutoGathersASparseIslandDenseForTheStickingPath) {
   const double rows = mp.problem.rowCount();
   ASSERT_GT(rows, 128);
   ASSERT_LT(4.0 * static_cast<double>(sparse->values.size()), rows * rows) << "a quarter full or more";
-  const double tolerance = 1e-8;
-  const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-10, 1000000));
-  ASSERT_TRUE(nlgs.converged) << nlgs.message;
-  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 1000000));
-  ASSERT_TRUE(r.converged) << r.message;
-  EXPECT_NE(r.solver.find("->active-set"), std::string::npos) << r.solver;
-  EXPECT_LE(problemResidual(mp, r.forces), tolerance);
-  EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6 * nlgs.forces.cwiseAbs().maxCoeff());
-  EXPECT_LT(2 * r.iterations, nlgs.iterations) << r.solver;
+  expectAutoEndsByTheStickingPath(mp, 2);
 }
 
 TEST(MujocoCrossCheck, DroppedRowsFoldedKeepTheMatch) {
