@@ -65,6 +65,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
       blk.kind = LocalKind::kBilateral;
       blk.bilateral_block = D;
       blk.bilateral_inverse = lu.inverse();
+      if (c.rows == 1) blk.inv_nn = blk.bilateral_inverse(0, 0);  // a scalar row's whole inverse (localStep)
       continue;
     }
     if (!(D(0, 0) > 0.0)) {

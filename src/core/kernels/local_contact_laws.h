@@ -347,6 +347,11 @@ inline void localStep(const LocalBlock& blk, const FrictionPolygon* polygon, dou
       break;
     }
     case LocalKind::kBilateral: {
+      if (blk.rows == 1) {  // a joint's or an equality's scalar row: no trip through the inverse's heap storage
+        delta[0] = -omega * (blk.inv_nn * d_c[0]);  // the general loop's products, in its order
+        lambda_c[0] += delta[0];
+        break;
+      }
       // Plain loops: no dynamic-size temporaries (the sweep must not allocate).
       const int n = blk.rows;
       const Eigen::MatrixXd& inv = blk.bilateral_inverse;

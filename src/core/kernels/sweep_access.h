@@ -83,6 +83,15 @@ struct SparseAccess {
     if (!moved) return;
     const int j = static_cast<int>(&blk - first_block);
     double* dd = d.data();
+    if (cols == 1) {  // a scalar row's column: no inner loop over columns
+      const double change = delta[0];
+      for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
+        const ColumnBlock& b = column_blocks[s];
+        for (int r = 0; r < b.rows; ++r) dd[b.row0 + r] += b.v[r] * change;
+      }
+      if (ctx.regularization != 0.0) dd[blk.offset] += ctx.regularization * change;
+      return;
+    }
     for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
       const ColumnBlock& b = column_blocks[s];
       for (int r = 0; r < b.rows; ++r) {
