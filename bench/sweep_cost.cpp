@@ -43,7 +43,7 @@ double nlgsSeconds(const lcs::core::Problem& problem, int sweeps) {
   p.solver = lcs::core::SolverKind::kNlgs;
   p.tolerance = std::numeric_limits<double>::min();  // never met: every sweep runs
   p.maxIt = sweeps;
-  p.initial_guess = false;  // every solve from zero: a sweep near the solution costs a third less
+  p.initial_guess = false;  // every solve from zero: near the solution a sweep can cost a third as much
   lcs::core::ContactSolver solver(p);
   const lcs::core::SolveResult r = solver.solve(problem);
   if (r.iterations != sweeps) return std::numeric_limits<double>::quiet_NaN();  // it stopped early
