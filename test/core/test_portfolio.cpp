@@ -516,7 +516,8 @@ TEST(Portfolio, TheGaussSeidelProbeEndsWeaklyCoupledProblems) {
 // stage reaches the tolerance well within what the plan's first member would cost (before
 // newton, about one sweep per row). 30 coupled contacts (90 rows, a tight tolerance: newton
 // is planned) on which Gauss-Seidel converges steadily in 15..30 sweeps end in the probe,
-// with nlgs's own sweeps from zero; checked against Coulomb's law and against nlgs.
+// in at most nlgs's own sweeps from zero (fewer where the probe's over-relaxation window
+// paid: one seed, 18 against 19); checked against Coulomb's law and against nlgs.
 TEST(Portfolio, TheProbeGoesOnWhileItsRateReachesTheTolerance) {
   for (unsigned seed : {1u, 2u}) {
     const Problem p = solvers_test::randomFrictionalProblem(30, seed, 0.5, 0.2);
@@ -526,7 +527,7 @@ TEST(Portfolio, TheProbeGoesOnWhileItsRateReachesTheTolerance) {
     const SolveResult r = solveProblem(p, params(SolverKind::kAuto, 1e-8, 1000));
     ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
     EXPECT_EQ(r.solver, "auto:nlgs") << seed;
-    EXPECT_EQ(r.iterations, nlgs.iterations) << seed;
+    EXPECT_LE(r.iterations, nlgs.iterations) << seed;
     EXPECT_LE(recomputedResidual(p, r), 1e-8);
     EXPECT_LE((r.forces - nlgs.forces).cwiseAbs().maxCoeff(), 1e-6);
   }

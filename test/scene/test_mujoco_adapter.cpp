@@ -33,6 +33,7 @@ const std::string kHumanoid = kModels + "/humanoid/humanoid.xml";
 const std::string kParticle = kModels + "/composite/particle.xml";
 const std::string kSoftbox = kModels + "/composite/softbox.xml";
 const std::string kAdhesion = kModels + "/adhesion/active_adhesion.xml";
+const std::string kCloth = kModels + "/composite/cloth.xml";
 
 bool haveModel(const std::string& path) { return std::ifstream(path).good(); }
 
@@ -333,6 +334,33 @@ TEST(MujocoCrossCheck, AutoEndsASoftBoxAtRestByTheStickingPath) {
   const core::SolveResult three = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, 1e-12, 3));
   ASSERT_GT(problemResidual(mp, three.forces), start) << "the probe's first sweeps should raise the residual";
   expectAutoEndsByTheStickingPath(mp, 4);
+}
+
+// A cloth draped over a capsule (step 300, elliptic cones: 148 rows, most of them the cloth's
+// joints, a linear system Gauss-Seidel converges on at a steady rate). Its probe's sweeps
+// alone reach 1e-5, so before the probe tried no over-relaxation and auto swept as long as
+// plain nlgs; over-relaxed sweeps (sor 1.3) take fewer. Now, once newton's warm-up is over,
+// the probe runs a window at Young's ω and keeps it: fewer sweeps than plain nlgs, on the
+// path `auto:nlgs`, with the answer's residual recomputed from the forces.
+TEST(MujocoCrossCheck, AutoOverRelaxesWithinItsProbe) {
+  if (!haveModel(kCloth)) GTEST_SKIP() << kCloth << " missing (libmujoco-samples)";
+  MujocoProblem mp;
+  ASSERT_NO_FATAL_FAILURE(ellipticAt(kCloth, 300, &mp));
+  for (double tolerance : {1e-4, 1e-5}) {
+    const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, tolerance, 100000));
+    ASSERT_TRUE(nlgs.converged) << nlgs.message;
+    ASSERT_GT(nlgs.iterations, 30) << "the probe should run past newton's warm-up (20 sweeps)";
+    core::SolverParams relaxed = params(core::SolverKind::kNlgs, tolerance, 100000);
+    relaxed.sor = 1.3;
+    const core::SolveResult sor = core::solveProblem(mp.problem, relaxed);
+    ASSERT_TRUE(sor.converged) << sor.message;
+    ASSERT_LT(sor.iterations, nlgs.iterations) << "over-relaxation should pay on this cloth";
+    const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 100000));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_EQ(r.solver, "auto:nlgs");
+    EXPECT_LT(r.iterations, nlgs.iterations) << tolerance << ": nlgs " << nlgs.iterations << ", sor 1.3 " << sor.iterations;
+    EXPECT_LE(problemResidual(mp, r.forces), tolerance);
+  }
 }
 
 // The same on a block-sparse W too sparse for newton's own dense gather: MuJoCo's
