@@ -864,7 +864,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   };
   // Gauss-Seidel's over-relaxation (kAutoOmegaTrial): a user's own sor is kept as it is.
   const bool adapt_omega = params.sor == 1.0;
-  double plain_rate = 0.0;  // residual factor per plain sweep, measured in the first window
+  double plain_rate = 0.0;  // residual factor per plain sweep: the first window, or the probe's last stage
   double gs_omega = 1.0;
   int omega_state = 0;  // 0: the plain window is due, 1: the window at Young's ω, 2: decided,
                         // 3: the probe's plain window after the one at ω
@@ -1123,7 +1123,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
             plain_rate = std::pow(best_residual / stage_start, 1.0 / r.iterations);
             omega_state = 1;
           }
-          if (adapt_omega && (omega_state == 1 || omega_state == 3)) cur.slice = std::min(cur.slice, kAutoOmegaTrial);
+          if (adapt_omega && (omega_state == 1 || omega_state == 3))
+            cur.slice = std::min(cur.slice, kAutoOmegaTrial);
           stage_start = best_residual;
           continue;
         }

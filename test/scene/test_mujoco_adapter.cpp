@@ -347,7 +347,8 @@ TEST(MujocoCrossCheck, AutoOverRelaxesWithinItsProbe) {
   MujocoProblem mp;
   ASSERT_NO_FATAL_FAILURE(ellipticAt(kCloth, 300, &mp));
   for (double tolerance : {1e-4, 1e-5}) {
-    const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, tolerance, 100000));
+    const core::SolveResult nlgs =
+        core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, tolerance, 100000));
     ASSERT_TRUE(nlgs.converged) << nlgs.message;
     ASSERT_GT(nlgs.iterations, 30) << "the probe should run past newton's warm-up (20 sweeps)";
     core::SolverParams relaxed = params(core::SolverKind::kNlgs, tolerance, 100000);
@@ -355,10 +356,12 @@ TEST(MujocoCrossCheck, AutoOverRelaxesWithinItsProbe) {
     const core::SolveResult sor = core::solveProblem(mp.problem, relaxed);
     ASSERT_TRUE(sor.converged) << sor.message;
     ASSERT_LT(sor.iterations, nlgs.iterations) << "over-relaxation should pay on this cloth";
-    const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 100000));
+    const core::SolveResult r =
+        core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 100000));
     ASSERT_TRUE(r.converged) << r.message;
     EXPECT_EQ(r.solver, "auto:nlgs");
-    EXPECT_LT(r.iterations, nlgs.iterations) << tolerance << ": nlgs " << nlgs.iterations << ", sor 1.3 " << sor.iterations;
+    EXPECT_LT(r.iterations, nlgs.iterations)
+        << tolerance << ": nlgs " << nlgs.iterations << ", sor 1.3 " << sor.iterations;
     EXPECT_LE(problemResidual(mp, r.forces), tolerance);
   }
 }
