@@ -125,7 +125,7 @@ constexpr int kAutoScoutRows = 30;
 // sweeps elsewhere (ball and box stacks, where over-relaxation would pay only later).
 // The probe's sweeps, where they go on past newton's warm-up (kept plain: newton resumes from
 // them) and their last stage's rate would need more than kAutoOmegaTrial further sweeps, run
-// the same trial: a window at Young's ω for that stage's rate, kept if it did better; if not,
+// a like trial: a window at Young's ω for that stage's rate, kept if it did better; if not,
 // a plain window follows and ω is kept if it did better than that one (plain sweeps only
 // slow as they go: the window before favours them). A MuJoCo cloth whose probe sweeps to 1e-5
 // alone: ω = 1.43 swept at 0.79 per sweep against the plain stage's 0.84, 42 sweeps where
@@ -864,7 +864,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   };
   // Gauss-Seidel's over-relaxation (kAutoOmegaTrial): a user's own sor is kept as it is.
   const bool adapt_omega = params.sor == 1.0;
-  double plain_rate = 0.0;  // residual factor per plain sweep: the first window, or the probe's last stage
+  double plain_rate = 0.0;  // residual factor per plain sweep: the first window's or the probe's stage's
   double gs_omega = 1.0;
   int omega_state = 0;  // 0: the plain window is due, 1: the window at Young's ω, 2: decided,
                         // 3: the probe's plain window after the one at ω
@@ -995,12 +995,17 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       best_error = r.solver_error;
       best_model = r.friction_model;
     }
+    // A window of the over-relaxation trial: whether it lowered the residual, and its residual
+    // factor per sweep (1 where it did not).
+    const bool window_moved = r.iterations > 0 && residual < start_residual && !failedToRun(r.status);
+    auto windowRate = [&] {
+      return window_moved ? std::pow(residual / start_residual, 1.0 / r.iterations) : 1.0;
+    };
     if (probe_omega_window) {
       // ω is kept where its window beat the plain sweeps before it; otherwise a plain window
       // follows, and ω is kept if it beat that one. Plain sweeps only slow as they go, so the
       // window before favours them, the window after less so.
-      const bool moved = r.iterations > 0 && residual < start_residual && !failedToRun(r.status);
-      const double rate = moved ? std::pow(residual / start_residual, 1.0 / r.iterations) : 1.0;
+      const double rate = windowRate();
       if (omega_state == 1) {
         omega_rate = rate;
         kept_omega = gs_omega;
@@ -1016,12 +1021,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       }
     }
     if (saved_slice > 0) {  // a trial window: its rate per sweep
-      const bool moved = r.iterations > 0 && residual < start_residual && !failedToRun(r.status);
-      const double rate = moved ? std::pow(residual / start_residual, 1.0 / r.iterations) : 1.0;
+      const double rate = windowRate();
       if (omega_state == 0) {  // the trial only where the plain sweeps would outlast it
         plain_rate = rate;
-        omega_state = moved && iterationsToReach(params.tolerance, start_residual, residual, r.iterations) >
-                                   kAutoOmegaTrial ? 1 : 2;
+        omega_state = window_moved && iterationsToReach(params.tolerance, start_residual, residual,
+                                                        r.iterations) > kAutoOmegaTrial
+                          ? 1
+                          : 2;
       } else {
         if (!(rate < plain_rate)) gs_omega = 1.0;
         omega_state = 2;
