@@ -40,8 +40,9 @@ using Clock = std::chrono::steady_clock;
 // parallel partner) and multi-point contacts (a quarter of the contacts in groups of three or
 // more coupled to exactly the same contacts: several points between the same bodies; both
 // shares over the contacts that are not bilateral, joints having no contact point), which
-// decide between Gauss-Seidel and apgd down to 1e-4 (at any tolerance where most rows are
-// bilateral) and put an apgd scout before a planned
+// decide between Gauss-Seidel and apgd from 1e-3 down to 1e-4 (at any tolerance where most
+// rows are bilateral; where about two digits are asked Gauss-Seidel goes first whatever they
+// say) and put an apgd scout before a planned
 // newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start (but not on a dense symmetric LCP whose plan
@@ -70,6 +71,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr double kAutoTightTolerance = 1e-3;   // below: a superlinear method pays off
 constexpr double kAutoModerateTolerance = 1e-4;  // down to it: Gauss-Seidel before apgd (below)
+// About two digits (a 1e-2 solve's islands get >= 0.7e-2): where the probe's sweeps are the
+// early, fast ones that may be the whole solve (an LCP's probe, Gauss-Seidel before apgd).
+constexpr double kAutoTwoDigits = 5e-3;
 constexpr double kAutoNewtonTolerance = 1e-6;  // below: newton up to kAutoNewtonRowsTight rows
 constexpr int kAutoNewtonRows = 200;           // factorization vs passes over W (see above)
 constexpr int kAutoNewtonRowsTight = 1000;
@@ -99,7 +103,6 @@ constexpr int kAutoProbeApgdSweeps = 50;  // before apgd (below)
 // costs at least kAutoProbeLcpFactorSweeps sweeps: a probe that gives up after its first
 // three then adds about 3/20 of a factorization to newton's solve (MuJoCo's humanoid
 // islands, 20-40 rows, are not probed).
-constexpr double kAutoProbeLcpTolerance = 5e-3;  // about two digits: a 1e-2 solve's islands get >= 0.7e-2
 constexpr int kAutoProbeLcpFactorSweeps = 20;
 // Before newton on multi-point or rank-deficient contacts, an apgd scout: where such a W is
 // well conditioned on the active set apgd ends in tens of iterations (box pyramids: 30-60)
@@ -175,7 +178,7 @@ int lcpFactorSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 
 // Whether Gauss-Seidel probes a symmetric LCP whose plan starts with newton's active-set path
 // (asked only under the residual rule, the one the probe runs under).
 bool probesSymmetricLcp(const SolveContext& ctx) {
-  return ctx.params->tolerance >= kAutoProbeLcpTolerance && lcpFactorSweeps(ctx) >= kAutoProbeLcpFactorSweeps;
+  return ctx.params->tolerance >= kAutoTwoDigits && lcpFactorSweeps(ctx) >= kAutoProbeLcpFactorSweeps;
 }
 
 // How many sweeps the probe may go on for, when their rate says they reach the tolerance,
@@ -1145,7 +1148,17 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // probe (apgd from a Gauss-Seidel iterate crawled on the box pyramids: 80×).
       startPlan();
       m = 0;
-      const SolverKind first = planned().front();  // the scout starts from the start anyway
+      // Where about two digits are asked and the probe's rate says Gauss-Seidel reaches them
+      // within a slice of its own, it goes before a planned apgd: multi-point contacts and rank
+      // deficiency slow its rate only later, as the active set settles (kAutoTwoDigits).
+      if (members.front().kind == SolverKind::kApgd && !members.front().scout &&
+          params.tolerance >= kAutoTwoDigits && probe_sweeps + needed <= firstSlice(probe_kind)) {
+        const auto gs = std::find_if(members.begin(), members.end(),
+                                     [&](const PortfolioMember& mem) { return mem.kind == probe_kind; });
+        if (gs != members.end()) std::rotate(members.begin(), gs, gs + 1);
+      }
+      // The plan's first member (the scout starts from the start anyway).
+      const SolverKind first = members.front().scout ? planned().front() : members.front().kind;
       const bool warmup = probe_kind == SolverKind::kNlgs;  // newton's warm-up sweeps are nlgs's
       // newton not from an iterate above the start's residual (the probe's first stage rose).
       const bool keep =

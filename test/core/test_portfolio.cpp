@@ -313,6 +313,38 @@ TEST(Portfolio, GaussSeidelFirstAtModerateToleranceUnlessContactsAreMultiPoint) 
   }
 }
 
+// Where about two digits are asked, the probe's rate decides between Gauss-Seidel and a
+// planned apgd (multi-point contacts): Gauss-Seidel goes on where that rate reaches the
+// tolerance within a slice of its own. Two stacks of the boxes above, four points per face,
+// alternate boxes ten and a hundred times heavier: on six boxes Gauss-Seidel needs fewer than
+// half apgd's iterations but more than the probe's allowance before apgd (apgd's run from the
+// start had cost auto as much as apgd alone), on thirty its sweeps stall and apgd, a dozen
+// iterations, still follows the probe. Checked against Coulomb's law from the forces.
+TEST(Portfolio, AtTwoDigitsTheProbesRateCanPutGaussSeidelBeforeApgd) {
+  const double tol = 1e-2;
+  const Problem six = boxStack(6, 4, 10.0, 0.5, 0.8);
+  const SolveResult nlgs = solveProblem(six, params(SolverKind::kNlgs, tol, 100000));
+  const SolveResult apgd = solveProblem(six, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_TRUE(nlgs.converged && apgd.converged);
+  ASSERT_GT(nlgs.iterations, 50);  // beyond the probe's allowance before apgd
+  ASSERT_LT(2 * nlgs.iterations, apgd.iterations);
+  const SolveResult r = solveProblem(six, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver.rfind("auto:nlgs", 0), 0u) << r.solver;
+  EXPECT_LT(2 * r.iterations, apgd.iterations) << r.solver;
+  EXPECT_LE(recomputedResidual(six, r), tol);
+  const Problem thirty = boxStack(30, 4, 100.0, 0.5, 0.8);
+  const SolveResult apgd30 = solveProblem(thirty, params(SolverKind::kApgd, tol, 100000));
+  const SolveResult nlgs30 = solveProblem(thirty, params(SolverKind::kNlgs, tol, 100000));
+  ASSERT_TRUE(apgd30.converged && nlgs30.converged);
+  ASSERT_GT(nlgs30.iterations, 10 * apgd30.iterations);
+  const SolveResult r30 = solveProblem(thirty, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r30.converged) << r30.solver << ": " << r30.message;
+  EXPECT_EQ(afterProbe(r30), "auto:apgd");
+  EXPECT_LE(r30.iterations, apgd30.iterations + 50);  // at most the probe's allowance on top
+  EXPECT_LE(recomputedResidual(thirty, r30), tol);
+}
+
 // Gauss-Seidel's over-relaxation is chosen online: after the probe, ten plain sweeps measure
 // their rate and, where at that rate more than ten would still be needed, ten more run at
 // Young's ω for that rate; ω stays only if they did better.
