@@ -41,8 +41,8 @@ using Clock = std::chrono::steady_clock;
 // more coupled to exactly the same contacts: several points between the same bodies; both
 // shares over the contacts that are not bilateral, joints having no contact point), which
 // decide between Gauss-Seidel and apgd from 1e-3 down to 1e-4 (at any tolerance where most
-// rows are bilateral; where about two digits are asked Gauss-Seidel goes first whatever they
-// say) and put an apgd scout before a planned
+// rows are bilateral; where about two digits are asked the probe's rate decides instead, at
+// its end) and put an apgd scout before a planned
 // newton (kAutoScoutIterations). The start is measured first: a
 // warm start that already meets the tolerance runs no member. Then, before any feature is
 // measured and wherever Gauss-Seidel can start (but not on a dense symmetric LCP whose plan
