@@ -286,7 +286,7 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     std::swap(x, x_new);
     std::swap(Wx, Wx_new);
     L *= kStepShrink;
-    if (it < params.maxIt && ctx.deadlinePassed()) {
+    if (it < params.maxIt && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
       lambda = best;
       keepState();
       report.status = SolveStatus::kTimeBudget;

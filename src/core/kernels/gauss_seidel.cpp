@@ -118,7 +118,7 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
       }
     }
     // At most one clock read per sweep.
-    if (sweep < params.maxIt && ctx.deadlinePassed()) {
+    if (sweep < params.maxIt && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
       endOnTimeBudget(report, lambda, best, params.time_budget, sweep);
       return report;
     }

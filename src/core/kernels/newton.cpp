@@ -524,6 +524,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   SolveContext& warm_ctx = ws.warm_ctx;
   warm_ctx = ctx;
   warm_ctx.params = &warm_params;
+  warm_ctx.has_trial_deadline = false;  // a trial judges newton's steps (kernels.h)
   if (warm_ctx.gs_memo == nullptr) {
     ws.memo.clear();  // a kept memo may describe another problem at the same address
     warm_ctx.gs_memo = &ws.memo;
@@ -655,7 +656,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
                        " Newton steps) reached before the tolerance";
       break;
     }
-    if (newton_steps > 0 && ctx.deadlinePassed()) {
+    if (newton_steps > 0 && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
       report.status = SolveStatus::kTimeBudget;
       report.message = "time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
                        std::to_string(newton_steps) + " Newton steps and " + std::to_string(sweeps) +

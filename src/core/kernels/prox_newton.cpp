@@ -93,6 +93,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   inner.params = &inner_params;
   inner.gs_memo = nullptr;  // r + σ changes at every proximal step: nothing to keep
   inner.start_residual = std::numeric_limits<double>::quiet_NaN();  // each subproblem is another
+  inner.has_trial_deadline = false;  // a trial judges the proximal steps (kernels.h)
 
   const double scale = meanDiagonal(problem, ctx.regularization);
   double sigma = kSigmaStart * scale;
@@ -107,7 +108,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       report.message = "prox: " + std::to_string(outer) + " proximal steps without reaching the tolerance";
       break;
     }
-    if (outer > 0 && ctx.deadlinePassed()) {
+    if (outer > 0 && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
       report.status = SolveStatus::kTimeBudget;
       report.message = "prox: time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
                        std::to_string(outer) + " proximal steps; best iterate returned";

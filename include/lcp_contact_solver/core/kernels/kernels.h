@@ -63,6 +63,16 @@ struct SolveContext {
   bool has_deadline = false;
   std::chrono::steady_clock::time_point deadline;
   bool deadlinePassed() const { return has_deadline && std::chrono::steady_clock::now() >= deadline; }
+  // auto's trial of a member handed a stall (portfolio.cpp): past trial_deadline a run whose
+  // best residual is still not below start_residual (NaN: no trial) stops as at the deadline.
+  // Kernels check it where they check deadlinePassed(), on their own best residual; their
+  // inner runs (newton's nlgs sweeps, prox's Newton solves) do not.
+  bool has_trial_deadline = false;
+  std::chrono::steady_clock::time_point trial_deadline;
+  bool trialPassed(double best_residual) const {
+    return has_trial_deadline && start_residual == start_residual && !(best_residual < start_residual) &&
+           std::chrono::steady_clock::now() >= trial_deadline;
+  }
 
   // Solver-independent residual of λ (computes d itself).
   double residual(const Eigen::VectorXd& lambda) const;
