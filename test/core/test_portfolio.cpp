@@ -896,6 +896,17 @@ TEST(Portfolio, NothingKeptFromTheLastSolveOfAChangedProblem) {
   }
 }
 
+// A kernel's context for p, as ContactSolver builds it: every contact active, no memo.
+SolveContext kernelContext(const Problem& p, const SolverParams& sp) {
+  SolveContext ctx;
+  ctx.problem = &p;
+  ctx.params = &sp;
+  ctx.offsets = p.rowOffsets();
+  ctx.mu = effectiveMu(p, sp.mu);
+  ctx.ignored.assign(p.contacts.size(), false);
+  return ctx;
+}
+
 // A member on trial (SolveContext::trialPassed, auto's first slice of a member handed a
 // stall): past its trial deadline a kernel stops with kTimeBudget only while its best residual
 // is not below the one it started from. Here the deadline has passed before the run starts.
@@ -906,12 +917,7 @@ TEST(Portfolio, NothingKeptFromTheLastSolveOfAChangedProblem) {
 TEST(Portfolio, AMemberOnTrialStopsOnlyWhereItHasNotLoweredTheResidual) {
   Problem p = boxStack(4, 4, 100.0, 0.5, 0.8);
   const SolverParams sp = params(SolverKind::kAuto, 1e-10, 5000);
-  SolveContext ctx;
-  ctx.problem = &p;
-  ctx.params = &sp;
-  ctx.offsets = p.rowOffsets();
-  ctx.mu = effectiveMu(p, sp.mu);
-  ctx.ignored.assign(p.contacts.size(), false);
+  SolveContext ctx = kernelContext(p, sp);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(p.rowCount());
   using Kernel = KernelReport (*)(const SolveContext&, Eigen::VectorXd&);
   const std::vector<std::pair<const char*, Kernel>> kernels = {
@@ -950,12 +956,7 @@ TEST(Portfolio, AMemberOnTrialStopsOnlyWhereItHasNotLoweredTheResidual) {
 TEST(Portfolio, ApgdSlicesResumeAsOneLongRun) {
   Problem p = boxStack(4, 4, 100.0, 0.5, 0.8);
   SolverParams sp = params(SolverKind::kApgd, 1e-14, 80);
-  SolveContext ctx;
-  ctx.problem = &p;
-  ctx.params = &sp;
-  ctx.offsets = p.rowOffsets();
-  ctx.mu = effectiveMu(p, sp.mu);
-  ctx.ignored.assign(p.contacts.size(), false);
+  SolveContext ctx = kernelContext(p, sp);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(p.rowCount());
 
   Eigen::VectorXd whole = zero;  // one run of 80 iterations
