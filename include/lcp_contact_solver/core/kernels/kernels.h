@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <utility>
@@ -70,7 +71,7 @@ struct SolveContext {
   bool has_trial_deadline = false;
   std::chrono::steady_clock::time_point trial_deadline;
   bool trialPassed(double best_residual) const {
-    return has_trial_deadline && start_residual == start_residual && !(best_residual < start_residual) &&
+    return has_trial_deadline && !std::isnan(start_residual) && !(best_residual < start_residual) &&
            std::chrono::steady_clock::now() >= trial_deadline;
   }
 
