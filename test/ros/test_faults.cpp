@@ -122,13 +122,16 @@ class Faults : public testing::Test {
   int non_finite_ = 0;
 };
 
-// Splits the contacts/forces stream into simulator runs: a run starts where the contacts'
-// stamp goes back. For each run: its contacts stamps and the forces that belong to it.
-// Contacts (from the simulator) and forces (from the node) come over two connections, so a
-// run's first forces can overtake its first contacts at the test. Stamps repeat from run to
-// run, so a force goes to the run whose contacts of the same stamp arrived nearest in wall
-// time (a restart takes far longer than a solve); one whose stamp no run sent goes to the run
-// under way when it arrived, where the test reports it as stale.
+// Splits the contacts/forces streams into simulator runs. Contacts: a run starts where the
+// stamp goes back. Forces come from one node over one connection in the order it published
+// them, and their stamps go back at a restart too: each stretch between two such jumps goes
+// to the run whose first contacts arrived nearest in wall time to the stretch's first forces.
+// Stamps repeat from run to run and the test gets the two topics over two connections (a
+// run's forces can overtake its contacts), so matching single forces to contacts by stamp
+// handed the under-way run's newest forces to an older run (a flaky double count, CI
+// 2026-12-04); a restart takes far longer than the gap between a run's first contacts and
+// first forces. A force the node sent late, after a newer run began, breaks its stretch
+// and shows as a missing and a doubled step.
 struct SimRun {
   struct Step {
     std::size_t contacts = 0;  // in the array
@@ -139,32 +142,28 @@ struct SimRun {
   std::vector<Event> forces;
 };
 std::vector<SimRun> splitRuns(const std::vector<Event>& events) {
+  auto stretches = [&events](Event::Kind kind) {
+    std::vector<std::vector<Event>> out;
+    for (const Event& e : events) {
+      if (e.kind != kind) continue;
+      if (out.empty() || e.stamp < out.back().back().stamp) out.emplace_back();
+      out.back().push_back(e);
+    }
+    return out;
+  };
   std::vector<SimRun> runs;
-  ros::Time last;
-  for (const Event& e : events) {
-    if (e.kind != Event::kContacts) continue;
-    if (runs.empty() || e.stamp < last) {
-      runs.emplace_back();
-      runs.back().start = e.arrival;
-    }
-    runs.back().steps[e.stamp] = {e.contacts, e.arrival};
-    last = e.stamp;
+  for (const std::vector<Event>& contacts : stretches(Event::kContacts)) {
+    runs.emplace_back();
+    runs.back().start = contacts.front().arrival;
+    for (const Event& e : contacts) runs.back().steps[e.stamp] = {e.contacts, e.arrival};
   }
-  for (const Event& e : events) {
-    if (e.kind != Event::kForces || runs.empty()) continue;
-    SimRun* nearest = nullptr;
-    double nearest_gap = 0.0;
-    for (SimRun& run : runs) {
-      auto it = run.steps.find(e.stamp);
-      if (it == run.steps.end()) continue;
-      const double gap = std::abs((e.arrival - it->second.arrival).toSec());
-      if (nearest == nullptr || gap < nearest_gap) nearest = &run, nearest_gap = gap;
-    }
-    if (nearest == nullptr) {  // the run under way when it arrived
-      for (SimRun& run : runs)
-        if (run.start <= e.arrival) nearest = &run;
-    }
-    if (nearest != nullptr) nearest->forces.push_back(e);
+  if (runs.empty()) return runs;
+  for (const std::vector<Event>& forces : stretches(Event::kForces)) {
+    const ros::WallTime first = forces.front().arrival;
+    SimRun* nearest = &runs.front();
+    for (SimRun& run : runs)
+      if (std::abs((run.start - first).toSec()) < std::abs((nearest->start - first).toSec())) nearest = &run;
+    nearest->forces.insert(nearest->forces.end(), forces.begin(), forces.end());
   }
   return runs;
 }
