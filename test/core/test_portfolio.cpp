@@ -381,6 +381,45 @@ TEST(Portfolio, AtTwoDigitsTheProbesRateCanPutGaussSeidelBeforeApgd) {
   EXPECT_LE(recomputedResidual(thirty, r30), tol);
 }
 
+// At a loose tolerance, where the plan puts apgd first (multi-point contacts) and the probe's
+// rate says Gauss-Seidel needs more sweeps than newton's warm-up and two factorizations (but
+// at most twice that), newton goes on from the probe's sweeps: six boxes, four points per
+// face, at 1e-3 (apgd 581 iterations, newton 28; auto followed apgd's, 601 in all). Its first
+// slice is what those sweeps would cost: where newton's steps stall (five boxes, a mass ratio
+// of 10: newton alone fails after 580 iterations) apgd takes over after that slice and auto
+// does at most about apgd's own work. Where the sweeps' rate is far slower (a mass ratio of
+// 100) apgd goes first as before. Residuals recomputed from the forces.
+TEST(Portfolio, AtALooseToleranceNewtonGoesBeforeApgdWhereItCostsLessThanTheSweeps) {
+  const double tol = 1e-3;
+  const Problem six = boxStack(6, 4, 1.0, 0.5, 0.8);
+  const SolveResult newton = solveProblem(six, params(SolverKind::kNewton, tol, 100000));
+  const SolveResult apgd = solveProblem(six, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_TRUE(newton.converged && apgd.converged);
+  ASSERT_LT(4 * newton.iterations, apgd.iterations);
+  const SolveResult r = solveProblem(six, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(afterProbe(r), "auto:newton");
+  EXPECT_LE(r.iterations, newton.iterations + 10) << r.solver;
+  EXPECT_LE(recomputedResidual(six, r), tol);
+
+  const Problem stalls = boxStack(5, 4, 10.0, 0.5, 0.8);
+  const SolveResult newton5 = solveProblem(stalls, params(SolverKind::kNewton, tol, 100000));
+  const SolveResult apgd5 = solveProblem(stalls, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_FALSE(newton5.converged);
+  ASSERT_TRUE(apgd5.converged);
+  const SolveResult s = solveProblem(stalls, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
+  EXPECT_EQ(afterProbe(s).rfind("auto:newton->apgd", 0), 0u) << s.solver;
+  EXPECT_LE(s.iterations, apgd5.iterations + 100) << s.solver;  // the probe's 50 and newton's slice at most
+  EXPECT_LE(recomputedResidual(stalls, s), tol);
+
+  const Problem heavy = boxStack(5, 4, 100.0, 0.5, 0.8);
+  const SolveResult h = solveProblem(heavy, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(h.converged) << h.solver << ": " << h.message;
+  EXPECT_EQ(afterProbe(h).rfind("auto:apgd", 0), 0u) << h.solver;
+  EXPECT_LE(recomputedResidual(heavy, h), tol);
+}
+
 // Gauss-Seidel's over-relaxation is chosen online: after the probe, ten plain sweeps measure
 // their rate and, where at that rate more than ten would still be needed, ten more run at
 // Young's ω for that rate; ω stays only if they did better.
