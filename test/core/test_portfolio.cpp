@@ -97,6 +97,16 @@ void expectPlanStartsWith(const SolveResult& r, const std::string& first) {
   EXPECT_EQ(afterProbe(r).rfind(first, 0), 0u) << r.solver;
 }
 
+// auto's answer on p at tol, checked: converged, its path after the probe starting with
+// `path`, and the tolerance met by the residual recomputed from its forces.
+SolveResult autoSolvesAlong(const Problem& p, double tol, const std::string& path) {
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 100000));
+  EXPECT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(afterProbe(r).rfind(path, 0), 0u) << r.solver;
+  EXPECT_LE(recomputedResidual(p, r), tol) << r.solver;
+  return r;
+}
+
 TEST(Portfolio, RankDeficientStackWhereNewtonStallsStillConverges) {
   const Problem p = boxStack(2, 8, 100.0, 0.5, 0.8);
   const double tol = 1e-8;
@@ -393,31 +403,20 @@ TEST(Portfolio, AtALooseToleranceNewtonGoesBeforeApgdWhereItCostsLessThanTheSwee
   const double tol = 1e-3;
   const Problem six = boxStack(6, 4, 1.0, 0.5, 0.8);
   const SolveResult newton = solveProblem(six, params(SolverKind::kNewton, tol, 100000));
-  const SolveResult apgd = solveProblem(six, params(SolverKind::kApgd, tol, 100000));
-  ASSERT_TRUE(newton.converged && apgd.converged);
-  ASSERT_LT(4 * newton.iterations, apgd.iterations);
-  const SolveResult r = solveProblem(six, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  ASSERT_TRUE(newton.converged);
+  ASSERT_LT(4 * newton.iterations, solveProblem(six, params(SolverKind::kApgd, tol, 100000)).iterations);
+  const SolveResult r = autoSolvesAlong(six, tol, "auto:newton");
   EXPECT_EQ(afterProbe(r), "auto:newton");
   EXPECT_LE(r.iterations, newton.iterations + 10) << r.solver;
-  EXPECT_LE(recomputedResidual(six, r), tol);
 
   const Problem stalls = boxStack(5, 4, 10.0, 0.5, 0.8);
   const SolveResult newton5 = solveProblem(stalls, params(SolverKind::kNewton, tol, 100000));
   const SolveResult apgd5 = solveProblem(stalls, params(SolverKind::kApgd, tol, 100000));
   ASSERT_FALSE(newton5.converged);
   ASSERT_TRUE(apgd5.converged);
-  const SolveResult s = solveProblem(stalls, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
-  EXPECT_EQ(afterProbe(s).rfind("auto:newton->apgd", 0), 0u) << s.solver;
+  const SolveResult s = autoSolvesAlong(stalls, tol, "auto:newton->apgd");
   EXPECT_LE(s.iterations, apgd5.iterations + 100) << s.solver;  // the probe's 50 and newton's slice at most
-  EXPECT_LE(recomputedResidual(stalls, s), tol);
-
-  const Problem heavy = boxStack(5, 4, 100.0, 0.5, 0.8);
-  const SolveResult h = solveProblem(heavy, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(h.converged) << h.solver << ": " << h.message;
-  EXPECT_EQ(afterProbe(h).rfind("auto:apgd", 0), 0u) << h.solver;
-  EXPECT_LE(recomputedResidual(heavy, h), tol);
+  autoSolvesAlong(boxStack(5, 4, 100.0, 0.5, 0.8), tol, "auto:apgd");
 }
 
 // Gauss-Seidel's over-relaxation is chosen online: after the probe, ten plain sweeps measure
@@ -522,10 +521,7 @@ TEST(Portfolio, AnApgdScoutGoesBeforeNewtonOnMultiPointContacts) {
   EXPECT_EQ(r.solver, "auto:nlgs->apgd");
   EXPECT_LE(recomputedResidual(pyramid, r), tol);
   const Problem stack = boxStack(4, 4, 100.0, 0.5, 0.8);
-  const SolveResult s = solveProblem(stack, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
-  EXPECT_EQ(afterProbe(s).rfind("auto:apgd->newton", 0), 0u) << s.solver;
-  EXPECT_LE(recomputedResidual(stack, s), tol);
+  autoSolvesAlong(stack, tol, "auto:apgd->newton");
   // The probe before a scout stops within apgd's allowance (50 sweeps), not one sweep per row
   // as before newton alone: the scout's first residuals are apgd's own from zero, found in
   // the history right after the probe's.
