@@ -760,14 +760,19 @@ struct Workspace {
   ApgdMemo apgd_memo;       // an apgd slice resumes the last one when handed its answer back
 };
 
+// Moves the member of that kind, if any, to the front of the plan; whether there was one.
+bool moveFirst(std::vector<PortfolioMember>& members, SolverKind kind) {
+  const auto it = std::find_if(members.begin(), members.end(),
+                               [kind](const PortfolioMember& mem) { return mem.kind == kind; });
+  if (it == members.end()) return false;
+  std::rotate(members.begin(), it, it + 1);
+  return true;
+}
+
 // Puts newton first in a plan, with a first slice of its warm-up and as many steps as
 // `sweeps` pay for (one step factorizes W: n/3 sweeps), at least kAutoNewtonSteps.
 void newtonFirst(std::vector<PortfolioMember>& members, const SolveContext& ctx, double sweeps) {
-  const auto newton = std::find_if(members.begin(), members.end(), [](const PortfolioMember& mem) {
-    return mem.kind == SolverKind::kNewton;
-  });
-  if (newton == members.end()) return;
-  std::rotate(members.begin(), newton, newton + 1);
+  if (!moveFirst(members, SolverKind::kNewton)) return;
   const double step_sweeps = std::max(1.0, ctx.problem->rowCount() / 3.0);
   const double steps = std::max<double>(kAutoNewtonSteps, (sweeps - kNewtonWarmupSweeps) / step_sweeps);
   members.front().slice = kNewtonWarmupSweeps + static_cast<int>(std::min(steps, 1e6));
@@ -1179,11 +1184,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // within a slice of its own, it goes before a planned apgd: multi-point contacts and rank
       // deficiency slow its rate only later, as the active set settles (kAutoTwoDigits).
       if (members.front().kind == SolverKind::kApgd && !members.front().scout &&
-          params.tolerance >= kAutoTwoDigits && probe_sweeps + needed <= firstSlice(probe_kind)) {
-        const auto gs = std::find_if(members.begin(), members.end(),
-                                     [&](const PortfolioMember& mem) { return mem.kind == probe_kind; });
-        if (gs != members.end()) std::rotate(members.begin(), gs, gs + 1);
-      }
+          params.tolerance >= kAutoTwoDigits && probe_sweeps + needed <= firstSlice(probe_kind))
+        moveFirst(members, probe_kind);
       // Where apgd would go first at a loose tolerance and the probe's rate says Gauss-Seidel
       // needs more sweeps than newton's warm-up and kAutoNewtonSteps factorizations cost
       // (newtonCheaperThanSweeps), but at most twice that, newton goes on from the probe's
