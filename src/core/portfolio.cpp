@@ -151,11 +151,14 @@ constexpr int kAutoNewtonSteps = 2;
 // Young's ω for a plain Gauss-Seidel rate ρ per sweep, capped at kAutoOmegaMax.
 double youngOmega(double rho) { return std::min(kAutoOmegaMax, 2.0 / (1.0 + std::sqrt(1.0 - rho))); }
 
+// One Newton step in sweeps: an LU of n rows (2n³/3 flops) against a sweep's 2n².
+double newtonStepSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 3.0; }
+
 bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
   const int n = ctx.problem->rowCount();
   const bool counted = !ctx.problem->bodies &&
                        (std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) || n <= kAutoNewtonRows);
-  return counted && sweeps > kNewtonWarmupSweeps + kAutoNewtonSteps * n / 3.0;
+  return counted && sweeps > kNewtonWarmupSweeps + kAutoNewtonSteps * newtonStepSweeps(ctx);
 }
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
@@ -770,10 +773,10 @@ bool moveFirst(std::vector<PortfolioMember>& members, SolverKind kind) {
 }
 
 // Puts newton first in a plan, with a first slice of its warm-up and as many steps as
-// `sweeps` pay for (one step factorizes W: n/3 sweeps), at least kAutoNewtonSteps.
+// `sweeps` pay for (newtonStepSweeps each), at least kAutoNewtonSteps.
 void newtonFirst(std::vector<PortfolioMember>& members, const SolveContext& ctx, double sweeps) {
   if (!moveFirst(members, SolverKind::kNewton)) return;
-  const double step_sweeps = std::max(1.0, ctx.problem->rowCount() / 3.0);
+  const double step_sweeps = std::max(1.0, newtonStepSweeps(ctx));
   const double steps = std::max<double>(kAutoNewtonSteps, (sweeps - kNewtonWarmupSweeps) / step_sweeps);
   members.front().slice = kNewtonWarmupSweeps + static_cast<int>(std::min(steps, 1e6));
 }
