@@ -23,9 +23,19 @@
 // of the linearisation only: it picks a small step among the many that solve it, while
 // Φ = 0 (the unregularized law) stays the target, so the limit is an exact solution. ε
 // follows the residual (ε = c · min(1, residual) >= 1e-8, c adaptive: divided by 10
-// after a step, multiplied by 100 when no step decreases the merit), which keeps the
-// local convergence fast and turns the step into a damped projected-Jacobi step
-// (Δ ≈ -Φ/ε) far from the solution; the floor keeps steps along W's null space short.
+// after a step the line search took whole or cut at most twice, multiplied by 10, up to 1,
+// after one it had to cut to a quarter or less, and by 100 when no step decreases the
+// merit), which keeps the local convergence fast and turns the step into a damped
+// projected-Jacobi step (Δ ≈ -Φ/ε) far from the solution; the floor keeps steps along W's
+// null space short. A step cut that far says the linearisation mispredicts the merit along
+// Δ, which on a rank-deficient W is a long step along J's near-null space: more damping
+// shortens it, up to ε = min(1, residual), the Levenberg-Marquardt weight μ = ‖Φ‖ under
+// which the iteration still converges quadratically where the solutions are not isolated
+// (a local error bound; Yamashita-Fukushima, Fan-Yuan). Only ever decreasing c instead
+// left ε at its floor after a few steps, and the line search cut step after step: to 1e-8,
+// OneObject-i1028 took 61 iterations (now 29) and the capsule piles 208 and 380 (now 26 and
+// 17). Not in prox's sub-problems, whose σ I regularizes them already: there the raise made
+// prox 1.17x slower over the study's cells and turned one LCP it solved into a failure.
 //
 // Hybrid. Semismooth Newton converges fast once the contact states (open, stick, slip)
 // are right but can crawl while they change. So it starts from 20 nlgs sweeps (or
@@ -78,6 +88,10 @@ constexpr int kMaxLineSearch = 30;
 constexpr double kRegularizationMin = 1e-8;
 constexpr double kRegularizationMax = 1e4;
 constexpr double kRegularizationStart = 1.0;
+// A step the line search cut to this length or less raises c tenfold, up to
+// kRegularizationAfterCut (ε = min(1, residual): the Levenberg-Marquardt weight ‖Φ‖).
+constexpr double kCutStep = 0.25;
+constexpr double kRegularizationAfterCut = 1.0;
 // Stall: the residual must fall below kStallFactor times its value kStallWindow Newton
 // steps earlier; otherwise up to kBurstSweeps nlgs sweeps (or a kBurstReduction-fold
 // decrease) run before Newton resumes.
@@ -596,6 +610,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   best = lambda;
   double best_residual = std::numeric_limits<double>::infinity();
   double c_reg = kRegularizationStart;
+  double step_t = 1.0;  // the last accepted step's length
   int newton_steps = 0;
   int sweeps = warm_sweeps;
   bool nlgs_usable =
@@ -757,6 +772,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           if (trial_merit <= (1.0 - 2.0 * kArmijo * t) * merit) {
             lambda = trial;
             stepped = true;
+            step_t = t;
             break;
           }
         }
@@ -772,7 +788,10 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         break;
       }
     } else {
-      c_reg = std::max(c_reg * 0.1, kRegularizationMin);
+      if (step_t <= kCutStep && !ctx.proximal_subproblem)
+        c_reg = std::min(c_reg * 10.0, kRegularizationAfterCut);
+      else
+        c_reg = std::max(c_reg * 0.1, kRegularizationMin);
     }
   }
   // The loop measured whichever iterate is returned (with u = W λ + d_free kept alongside).

@@ -17,7 +17,8 @@
 // Newton solves and that lowers the true residual, multiplied by 10 when Newton fails or
 // the residual does not fall. σ starts at 1e-2 times the mean diagonal of W (W's scale).
 //
-// Inexact sub-problems: each runs newton (newton.cpp, its own nlgs warm start and bursts)
+// Inexact sub-problems: each runs newton (newton.cpp, its own nlgs warm start and bursts,
+// and its damping without the raise after a cut step: σ I regularizes the sub-problem already)
 // to a tolerance tied to the current true residual, max(tolerance / 2, residual / 10) on
 // the sub-problem's residual, so early sub-problems are cheap and the inexactness falls
 // with the outer residual (summable errors, as inexact proximal point needs), and at most
@@ -94,6 +95,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   inner.gs_memo = nullptr;  // r + σ changes at every proximal step: nothing to keep
   inner.start_residual = std::numeric_limits<double>::quiet_NaN();  // each subproblem is another
   inner.has_trial_deadline = false;  // a trial judges the proximal steps (kernels.h)
+  inner.proximal_subproblem = true;
 
   const double scale = meanDiagonal(problem, ctx.regularization);
   double sigma = kSigmaStart * scale;

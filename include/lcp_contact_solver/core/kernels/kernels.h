@@ -58,6 +58,9 @@ struct SolveContext {
   int warmup_sweeps_done = 0;
   bool warmup_start_was_warm = false;
   ApgdMemo* apgd_memo = nullptr;       // see above; none: each call starts afresh
+  // A proximal sub-problem (prox_newton.cpp): its W + σI is regularized by the prox term
+  // already, so newton keeps its damping to the one rule of a well-posed problem (newton.cpp).
+  bool proximal_subproblem = false;
   // End of the time budget (SolverParams::time_budget), if any. Kernels call
   // deadlinePassed() at most once per sweep, iteration or pivot and, when it returns
   // true, stop with their best iterate and SolveStatus::kTimeBudget.
