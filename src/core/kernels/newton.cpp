@@ -23,7 +23,7 @@
 // of the linearisation only: it picks a small step among the many that solve it, while
 // Φ = 0 (the unregularized law) stays the target, so the limit is an exact solution. ε
 // follows the residual (ε = c · min(1, residual) >= 1e-8, c adaptive: divided by 10
-// after a step the line search took whole or cut at most twice, multiplied by 10, up to 1,
+// after a step the line search took whole or halved once, multiplied by 10, up to 1,
 // after one it had to cut to a quarter or less, and by 100 when no step decreases the
 // merit), which keeps the local convergence fast and turns the step into a damped
 // projected-Jacobi step (Δ ≈ -Φ/ε) far from the solution; the floor keeps steps along W's
