@@ -610,7 +610,6 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   best = lambda;
   double best_residual = std::numeric_limits<double>::infinity();
   double c_reg = kRegularizationStart;
-  double step_t = 1.0;  // the last accepted step's length
   int newton_steps = 0;
   int sweeps = warm_sweeps;
   bool nlgs_usable =
@@ -759,6 +758,7 @@ KernelReport runNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         std::clamp(c_reg * std::min(1.0, residual), kRegularizationMin, kRegularizationMax);
     previous_epsilon = epsilon;
     bool stepped = false;
+    double step_t = 1.0;  // the accepted step's length (read only when stepped)
     if (system->factorize(contacts, blocks, epsilon)) {
       rhs = -phi;
       system->solve(rhs, delta);
