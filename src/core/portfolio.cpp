@@ -86,6 +86,10 @@ constexpr double kAutoRedundant = 0.9;        // normal rows this parallel (W me
 constexpr double kAutoRedundantShare = 0.25;  // this share of such contacts: W taken as rank-deficient
 constexpr int kAutoMultiPoint = 3;  // contacts between the same bodies: 3 x 3 rows > 6 DoF
 constexpr int kAutoLemkeRows = 1000;          // LCPs up to this size may start with Lemke
+// A symmetric LCP up to this size whose plan starts with newton runs its active-set path
+// without the portfolio's bookkeeping (directActiveSet): one Cholesky step of 16 rows, about
+// 1 400 flops, costs as much as that bookkeeping, so above it the bookkeeping does not count.
+constexpr int kAutoDirectRows = 16;
 // Block-sparse W (scenes: one block per pair of contacts sharing a body): Gauss-Seidel first
 // below this coupling, at any tolerance. Chosen between the generated scenes' sphere piles
 // (κ ≈ 1.8, where nlgs is fastest) and box stacks (κ ≥ 2.8, face contacts, where apgd is).
@@ -253,6 +257,21 @@ bool stickingPays(const SolveContext& ctx, const Eigen::VectorXd& lambda, double
   return 2.0 * needed_sweeps > stickingCostSweeps(ctx) && stickingPathApplies(ctx, kAutoStickDenseRows) &&
          allSticking(ctx, lambda);
 }
+
+// SolveContext::positiveDiagonal, measured at most once per solve (the probe and the plan
+// both read it).
+class PositiveDiagonal {
+ public:
+  explicit PositiveDiagonal(const SolveContext& ctx) : ctx_(ctx) {}
+  bool operator()() const {
+    if (state_ < 0) state_ = ctx_.positiveDiagonal() ? 1 : 0;
+    return state_ == 1;
+  }
+
+ private:
+  const SolveContext& ctx_;
+  mutable int state_ = -1;
+};
 
 struct AutoFeatures {
   int rows = 0;
@@ -544,7 +563,8 @@ bool firstOrderBySize(const AutoFeatures& f) {
 // newton tests the symmetry itself before its active-set path (a non-symmetric W gets its
 // general semismooth path, then Lemke on a stall). `known_symmetric`: W's symmetry when the
 // caller measured it already (-1: not measured).
-AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, int known_symmetric) {
+AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, int known_symmetric,
+                          const PositiveDiagonal& positive_diagonal) {
   AutoFeatures f;
   f.rows = ctx.problem->rowCount();
   f.body_form = static_cast<bool>(ctx.problem->bodies);
@@ -552,7 +572,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
   if (!friction && f.rows > kAutoLemkeRows) return f;  // the plan reads only the size there
   if (!friction && f.sparse) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
     f.coupling = sparseCoupling(ctx, std::get<BlockSparseMatrix>(ctx.problem->W), kAutoStrongDominant);
-    f.positive_diagonal = f.coupling < kAutoStrongDominant && ctx.positiveDiagonal();  // else unread
+    f.positive_diagonal = f.coupling < kAutoStrongDominant && positive_diagonal();  // else unread
     f.symmetric = true;  // presumed (below)
     return f;
   }
@@ -560,7 +580,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.symmetric = known_symmetric >= 0 ? known_symmetric == 1 : isSymmetric(ctx.problem->W, 1e-12);
     if (f.symmetric) {  // the plan reads κ < kAutoStrongDominant and, below it, the diagonal
       f.coupling = denseSymmetricCoupling(ctx, std::get<Eigen::MatrixXd>(ctx.problem->W), kAutoStrongDominant);
-      f.positive_diagonal = ctx.positiveDiagonal();
+      f.positive_diagonal = positive_diagonal();
       return f;
     }
   }
@@ -590,20 +610,21 @@ bool mostlyBilateral(const SolveContext& ctx) {
 }
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
-Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_symmetric) {
+Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_symmetric,
+              const PositiveDiagonal& positive_diagonal) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
   if (friction && pyramidModel(p)) return {K::kPgs, K::kLemke};
   // One contact (most islands of a scene at rest): Gauss-Seidel's local step is that
   // contact's own exact solve, so no feature is worth measuring.
-  if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && ctx.positiveDiagonal())
+  if (activeContacts(ctx) <= 1 && !ctx.problem->bodies && positive_diagonal())
     return friction ? Plan{K::kNlgs, K::kNewton, K::kApgd, K::kProx}
                     : Plan{K::kPgs, K::kLemke, K::kNewton, K::kApgd};
   if (ctx.problem->bodies)  // unbuilt first: no W
     return friction ? Plan{K::kNlgs, K::kApgd, K::kNewton, K::kProx}
                     : Plan{K::kPgs, K::kNewton, K::kApgd};
-  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof, friction, known_symmetric);
+  const AutoFeatures f = autoFeatures(ctx, ctx.body_dof, friction, known_symmetric, positive_diagonal);
   if (!friction) {
     // An LCP. Symmetric W (a convex QP): newton's active-set path ends in a few Cholesky
     // steps whatever the coupling; projected Gauss-Seidel only where W is so diagonally
@@ -706,14 +727,14 @@ void projectFeasible(const SolveContext& ctx, Eigen::VectorXd& x) {
 // The Gauss-Seidel kernel that can probe this problem (kAuto: none): not where the plan is
 // fixed (torsional/rolling contacts, the pyramid), not without a positive normal diagonal,
 // not for a block-sparse LCP unless probesSymmetricLcp.
-SolverKind probeKind(const SolveContext& ctx, bool friction) {
+SolverKind probeKind(const SolveContext& ctx, bool friction, const PositiveDiagonal& positive_diagonal) {
   if (hasExtendedFriction(*ctx.problem)) return SolverKind::kAuto;
   if (friction && pyramidModel(*ctx.params)) return SolverKind::kAuto;
   // A block-sparse LCP is presumed symmetric (below): newton's active-set path, a few
   // Cholesky steps, is what the probe would delay (MuJoCo's pyramidal steps: +10..40 %).
   if (!friction && std::holds_alternative<BlockSparseMatrix>(ctx.problem->W) && !probesSymmetricLcp(ctx))
     return SolverKind::kAuto;
-  if (!ctx.problem->bodies && !ctx.positiveDiagonal()) return SolverKind::kAuto;
+  if (!ctx.problem->bodies && !positive_diagonal()) return SolverKind::kAuto;
   return friction ? SolverKind::kNlgs : SolverKind::kPgs;
 }
 
@@ -781,6 +802,27 @@ void newtonFirst(std::vector<PortfolioMember>& members, const SolveContext& ctx,
   members.front().slice = kNewtonWarmupSweeps + static_cast<int>(std::min(steps, 1e6));
 }
 
+// A small symmetric LCP (W dense or in blocks) whose plan starts with newton: newton's
+// active-set path (a few Cholesky steps of at most kAutoDirectRows rows) runs directly,
+// without the portfolio's set-up and slice bookkeeping, which cost more than the path itself
+// there (a 2-row LCP: about 1 500 of auto's 11 000 instructions per solve). True, with
+// `lambda` and `report` filled, when it converges; otherwise `lambda` is untouched and the
+// portfolio starts as it would have (its newton runs the same few steps again, the price of
+// a rare failure).
+bool directActiveSet(const SolveContext& ctx, Eigen::VectorXd& lambda, Eigen::VectorXd& x, KernelReport& report) {
+  const Clock::time_point t0 = Clock::now();
+  x = lambda;
+  KernelReport r;
+  if (!solveSymmetricActiveSet(ctx, x, &r)) return false;
+  lambda = x;
+  report.status = SolveStatus::kConverged;
+  report.iterations = r.iterations;
+  report.solver_error = r.solver_error;
+  report.stages.emplace_back(solverName(SolverKind::kNewton),
+                             std::chrono::duration<double>(Clock::now() - t0).count());
+  return true;
+}
+
 Workspace& portfolioWorkspace() {
   thread_local Workspace work;
   return work;
@@ -808,8 +850,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   Plan plan;                     // measured once, when first needed
   bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton (residual rule only)
   int known_symmetric = -1;      // W's symmetry once measured (LCPs)
+  const PositiveDiagonal positive_diagonal(ctx);
   auto planned = [&]() -> const Plan& {
-    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout, known_symmetric);
+    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout, known_symmetric, positive_diagonal);
     return plan;
   };
   auto startPlan = [&] {
@@ -823,7 +866,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   };
   // The probe runs before the features are even measured: a problem it solves pays for
   // nothing else.
-  SolverKind probe_kind = by_residual ? probeKind(ctx, friction) : SolverKind::kAuto;
+  SolverKind probe_kind = by_residual ? probeKind(ctx, friction, positive_diagonal) : SolverKind::kAuto;
   // Except on a dense symmetric LCP (a convex QP) whose plan is newton's active-set path: a
   // few Cholesky steps whatever the coupling, which the probe's sweeps would only delay
   // (MuJoCo's dense pyramidal steps: +45 %), unless probesSymmetricLcp. The symmetry test
@@ -834,6 +877,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (known_symmetric == 1 && planned().front() == SolverKind::kNewton && !probesSymmetricLcp(ctx))
       probe_kind = SolverKind::kAuto;
   }
+  if (by_residual && !friction && probe_kind == SolverKind::kAuto && !ctx.problem->bodies &&
+      ctx.problem->rowCount() <= kAutoDirectRows && planned().front() == SolverKind::kNewton &&
+      directActiveSet(ctx, lambda, work.x, report))
+    return report;
   if (probe_kind != SolverKind::kAuto) {
     PortfolioMember probe{probe_kind, kAutoProbeFirst};
     probe.probe = true;

@@ -701,6 +701,34 @@ TEST(Portfolio, SymmetricCoupledLcpStartsWithNewtonOtherwiseLemke) {
   EXPECT_EQ(afterProbe(s).rfind("auto:lemke", 0), 0u) << s.solver;
 }
 
+// A small symmetric LCP whose plan is newton runs newton's active-set path without the
+// portfolio's bookkeeping: the same path and answer. Where that path cannot solve it (an
+// indefinite W: its Cholesky and LDLᵀ fail), the portfolio starts as before and its newton
+// member's general semismooth Newton carries it.
+TEST(Portfolio, ASmallSymmetricLcpRunsNewtonsActiveSetDirectly) {
+  // Singular W (rank 1): every z1 + z2 = 1, z >= 0 solves it.
+  Eigen::Matrix2d singular;
+  singular << 1.0, 1.0, 1.0, 1.0;
+  const Problem flat = frictionlessLcp(singular, Eigen::Vector2d(-1.0, -1.0));
+  const SolveResult r = autoSolvesAlong(flat, 1e-10, "auto:newton");
+  EXPECT_EQ(r.solver, "auto:newton");
+  EXPECT_NEAR(r.forces.sum(), 1.0, 1e-10);
+  EXPECT_GE(r.forces.minCoeff(), 0.0);
+  const SolveResult newton = solveProblem(flat, params(SolverKind::kNewton, 1e-10, 1000));
+  EXPECT_EQ(r.forces, newton.forces);
+  EXPECT_EQ(r.iterations, newton.iterations);
+  // Indefinite (eigenvalues 3 and -1): λ = (1, 0) gives d = (0, 1).
+  Eigen::Matrix2d indefinite;
+  indefinite << 1.0, 2.0, 2.0, 1.0;
+  const Problem saddle = frictionlessLcp(indefinite, Eigen::Vector2d(-1.0, -1.0));
+  const SolveResult s = solveProblem(saddle, params(SolverKind::kAuto, 1e-10, 1000));
+  ASSERT_TRUE(s.converged) << s.solver << ": " << s.message;
+  EXPECT_LE(recomputedResidual(saddle, s), 1e-10) << s.solver;
+  // Why the portfolio ran: newton alone leaves the active-set path for its general Newton.
+  const SolveResult general = solveProblem(saddle, params(SolverKind::kNewton, 1e-10, 1000));
+  EXPECT_EQ(general.message.find("active-set"), std::string::npos) << general.message;
+}
+
 // A few contacts at a loose tolerance start with newton, whose warm-up is the probe's sweeps:
 // three boxes stacked, one contact per face, the middle one 100 times heavier, pushed
 // sideways. Gauss-Seidel's rate collapses on the mass ratio (hundreds of sweeps) and apgd,

@@ -51,6 +51,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -115,6 +116,7 @@ class ReducedSystem {
 // matrix.
 struct DenseScratch {
   std::vector<double> W, M, b;
+  Eigen::VectorXd y;  // the semidefinite solve's permuted right-hand side
   std::vector<int> index;
   std::unique_ptr<Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>> ldlt;  // the semidefinite case
   Eigen::MatrixXd A;
@@ -199,7 +201,8 @@ class DenseReduced : public ReducedSystem {
   }
   // x = Pᵀ L⁻ᵀ D⁺ L⁻¹ P b, D⁺ dropping the zero pivots.
   void solveSemidefinite(Eigen::Map<Eigen::VectorXd>& b) const {
-    Eigen::VectorXd y = s_.ldlt->transpositionsP() * b;
+    Eigen::VectorXd& y = s_.y;
+    y = s_.ldlt->transpositionsP() * b;
     s_.ldlt->matrixL().solveInPlace(y);
     const Eigen::VectorXd& D = s_.ldlt->vectorD();
     for (int k = 0; k < m_; ++k) y[k] = D[k] > zero_pivot_ ? y[k] / D[k] : 0.0;
@@ -252,37 +255,41 @@ bool denseSystem(const SolveContext& ctx) {
   return blocks == nullptr || n <= kDenseMaxRows || 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
 }
 
-// W + r I as a system, gathered dense or sparse, or null when W is not symmetric to
-// kSymmetryTolerance. A dense one keeps its storage in `dense_scratch`.
-std::unique_ptr<ReducedSystem> makeSystem(const SolveContext& ctx, bool gather_dense, DenseScratch& dense_scratch) {
+// W + r I gathered into `system` (its storage the thread's scratch); false when W is not
+// symmetric to kSymmetryTolerance.
+bool gatherDense(const SolveContext& ctx, DenseReduced& system) {
   const Problem& p = *ctx.problem;
   const int n = ctx.offsets.back();
   const auto* dense = std::get_if<Eigen::MatrixXd>(&p.W);
-  if (gather_dense) {
-    auto system = std::make_unique<DenseReduced>(dense_scratch, n);
-    Eigen::Map<Eigen::MatrixXd> W = system->W();
-    if (dense != nullptr) {
-      W = *dense;
-    } else {  // scatter the blocks (toDense's temporaries cost more than the island's solve)
-      const auto& B = std::get<BlockSparseMatrix>(p.W);
-      W.setZero();
-      for (int bi = 0; bi < B.blockCount(); ++bi)
-        for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
-          const int bj = B.block_col[s];
-          const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
-          const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
-          const double* v = B.values.data() + B.value_start[s];
-          for (int r = 0; r < rows; ++r)
-            for (int c = 0; c < cols; ++c) W(r0 + r, c0 + c) = v[r * cols + c];
-        }
-    }
-    W.diagonal().array() += ctx.regularization;
-    const double limit = kSymmetryTolerance * (n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0);
-    for (int c = 0; c < n; ++c)
-      for (int r = c + 1; r < n; ++r)
-        if (std::abs(W(r, c) - W(c, r)) > limit) return nullptr;
-    return system;
+  Eigen::Map<Eigen::MatrixXd> W = system.W();
+  if (dense != nullptr) {
+    W = *dense;
+  } else {  // scatter the blocks (toDense's temporaries cost more than the island's solve)
+    const auto& B = std::get<BlockSparseMatrix>(p.W);
+    W.setZero();
+    for (int bi = 0; bi < B.blockCount(); ++bi)
+      for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
+        const int bj = B.block_col[s];
+        const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
+        const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
+        const double* v = B.values.data() + B.value_start[s];
+        for (int r = 0; r < rows; ++r)
+          for (int c = 0; c < cols; ++c) W(r0 + r, c0 + c) = v[r * cols + c];
+      }
   }
+  W.diagonal().array() += ctx.regularization;
+  const double limit = kSymmetryTolerance * (n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0);
+  for (int c = 0; c < n; ++c)
+    for (int r = c + 1; r < n; ++r)
+      if (std::abs(W(r, c) - W(c, r)) > limit) return false;
+  return true;
+}
+
+// W + r I as a sparse system (block-sparse W), or null when W is not symmetric to
+// kSymmetryTolerance.
+std::unique_ptr<ReducedSystem> makeSparseSystem(const SolveContext& ctx) {
+  const Problem& p = *ctx.problem;
+  const int n = ctx.offsets.back();
   const auto& B = std::get<BlockSparseMatrix>(p.W);
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(B.values.size() + n);
@@ -337,10 +344,21 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, int den
   std::vector<Role>& roles = scratch.roles;
   if (problem.bodies || !rowRoles(ctx, stick, &roles)) return false;
   if (stick && !stickingPathApplies(ctx, dense_rows)) return false;
-  const bool gather_dense = denseSystem(ctx) || (stick && ctx.offsets.back() <= dense_rows);
-  std::unique_ptr<ReducedSystem> system = makeSystem(ctx, gather_dense, scratch.dense);
-  if (!system) return false;
   const int n = ctx.offsets.back();
+  // A dense system is a view of the thread's scratch, made on the stack: no allocation on a
+  // microsecond LCP or a small island.
+  const bool gather_dense = denseSystem(ctx) || (stick && n <= dense_rows);
+  std::optional<DenseReduced> dense;
+  std::unique_ptr<ReducedSystem> sparse;
+  ReducedSystem* system = nullptr;
+  if (gather_dense) {
+    dense.emplace(scratch.dense, n);
+    if (gatherDense(ctx, *dense)) system = &*dense;
+  } else {
+    sparse = makeSparseSystem(ctx);
+    system = sparse.get();
+  }
+  if (system == nullptr) return false;
 
   // ρ_i = 1 / (W_ii + r): only the sign of λ_i - ρ_i u_i matters, ρ keeps it scale-free.
   Eigen::VectorXd& rho = scratch.rho;
@@ -353,7 +371,10 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, int den
     u += problem.d_free;
   };
   velocities(lambda);
-  double best_residual = naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
+  // The start's residual, unless the caller measured it already (auto: the same measure).
+  double best_residual = !stick && !std::isnan(ctx.start_residual)
+                             ? ctx.start_residual
+                             : naturalMapResidual(problem, ctx.mu, lambda, u, ctx.ignored);
   Eigen::VectorXd& best = scratch.best;
   best = lambda;
   if (best_residual <= params.tolerance) {  // the warm start solves it already
@@ -400,8 +421,10 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, int den
     if (residual <= params.tolerance) {
       report->status = SolveStatus::kConverged;
       report->solver_error = residual;
-      report->message = std::string(stick ? "sticking " : "") + "active-set Newton on symmetric W (Cholesky): " +
-                        std::to_string(report->iterations) + " steps";
+      // A fixed text (the steps are report->iterations): composing one had cost a tenth of a
+      // 2-row LCP's solve.
+      report->message = stick ? "sticking active-set Newton on symmetric W (Cholesky)"
+                              : "active-set Newton on symmetric W (Cholesky)";
       return true;
     }
     // The set is right but the tolerance is out of reach (with `stick`: some contact's
