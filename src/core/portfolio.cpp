@@ -1232,9 +1232,18 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       m = 0;
       // Where about two digits are asked and the probe's rate says Gauss-Seidel reaches them
       // within a slice of its own, it goes before a planned apgd: multi-point contacts and rank
-      // deficiency slow its rate only later, as the active set settles (kAutoTwoDigits).
-      if (members.front().kind == SolverKind::kApgd && !members.front().scout &&
-          params.tolerance >= kAutoTwoDigits && probe_sweeps + needed <= firstSlice(probe_kind))
+      // deficiency slow its rate only later, as the active set settles (kAutoTwoDigits). At
+      // three digits (any loose tolerance) too, where that rate was measured past the probe's
+      // first stage (the first sweeps from the start fall faster than the later ones: a box
+      // pyramid whose three sweeps promised 38 more took 114) and the sweeps cost less than
+      // newton (newtonCheaperThanSweeps; the rule below otherwise): apgd's cost is not known,
+      // these sweeps' is.
+      const bool gs_in_slice = probe_sweeps + needed <= firstSlice(probe_kind);
+      const bool rate_past_first_stage = probe_sweeps > kAutoProbeFirst;
+      if (members.front().kind == SolverKind::kApgd && !members.front().scout && gs_in_slice &&
+          (params.tolerance >= kAutoTwoDigits ||
+           (params.tolerance >= kAutoTightTolerance && rate_past_first_stage &&
+            !newtonCheaperThanSweeps(ctx, probe_sweeps + needed))))
         moveFirst(members, probe_kind);
       // Where apgd would go first at a loose tolerance and the probe's rate says Gauss-Seidel
       // needs more sweeps than newton's warm-up and kAutoNewtonSteps factorizations cost
