@@ -583,6 +583,9 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
       f.positive_diagonal = positive_diagonal();
       return f;
     }
+    // Non-symmetric: the plan reads Gauss-Seidel's contraction bound only where pgs can start
+    // (a zero diagonal, the usual non-monotone LCP, goes to Lemke without it).
+    if (!positive_diagonal()) return f;
   }
   // Above the small size the multi-point share is measured only where the plan reads it,
   // in a second pass (firstOrderBySize): on a MuJoCo cloth's dense 265 rows, which go to
