@@ -255,6 +255,20 @@ bool denseSystem(const SolveContext& ctx) {
   return blocks == nullptr || n <= kDenseMaxRows || 4.0 * static_cast<double>(blocks->values.size()) >= double(n) * n;
 }
 
+// f(row, column, value) for every entry of W's stored blocks.
+template <typename F>
+void forEachStoredEntry(const BlockSparseMatrix& B, F&& f) {
+  for (int bi = 0; bi < B.blockCount(); ++bi)
+    for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
+      const int bj = B.block_col[s];
+      const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
+      const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
+      const double* v = B.values.data() + B.value_start[s];
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) f(r0 + r, c0 + c, v[r * cols + c]);
+    }
+}
+
 // W + r I gathered into `system` (its storage the thread's scratch); false when W is not
 // symmetric to kSymmetryTolerance.
 bool gatherDense(const SolveContext& ctx, DenseReduced& system) {
@@ -265,17 +279,8 @@ bool gatherDense(const SolveContext& ctx, DenseReduced& system) {
   if (dense != nullptr) {
     W = *dense;
   } else {  // scatter the blocks (toDense's temporaries cost more than the island's solve)
-    const auto& B = std::get<BlockSparseMatrix>(p.W);
     W.setZero();
-    for (int bi = 0; bi < B.blockCount(); ++bi)
-      for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
-        const int bj = B.block_col[s];
-        const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
-        const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
-        const double* v = B.values.data() + B.value_start[s];
-        for (int r = 0; r < rows; ++r)
-          for (int c = 0; c < cols; ++c) W(r0 + r, c0 + c) = v[r * cols + c];
-      }
+    forEachStoredEntry(std::get<BlockSparseMatrix>(p.W), [&](int r, int c, double w) { W(r, c) = w; });
   }
   W.diagonal().array() += ctx.regularization;
   const double limit = kSymmetryTolerance * (n > 0 ? W.diagonal().cwiseAbs().maxCoeff() : 0.0);
@@ -294,15 +299,7 @@ std::unique_ptr<ReducedSystem> makeSparseSystem(const SolveContext& ctx) {
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(B.values.size() + n);
   for (int i = 0; i < n; ++i) triplets.emplace_back(i, i, ctx.regularization);
-  for (int bi = 0; bi < B.blockCount(); ++bi)
-    for (int s = B.row_start[bi]; s < B.row_start[bi + 1]; ++s) {
-      const int bj = B.block_col[s];
-      const int r0 = B.block_offset[bi], rows = B.block_offset[bi + 1] - r0;
-      const int c0 = B.block_offset[bj], cols = B.block_offset[bj + 1] - c0;
-      const double* v = B.values.data() + B.value_start[s];
-      for (int r = 0; r < rows; ++r)
-        for (int c = 0; c < cols; ++c) triplets.emplace_back(r0 + r, c0 + c, v[r * cols + c]);
-    }
+  forEachStoredEntry(B, [&](int r, int c, double w) { triplets.emplace_back(r, c, w); });
   Eigen::SparseMatrix<double> S(n, n);
   S.setFromTriplets(triplets.begin(), triplets.end());
   S.makeCompressed();
