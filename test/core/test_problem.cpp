@@ -88,6 +88,33 @@ TEST(Problem, BlockSparseRoundTripsThroughDense) {
   EXPECT_NE(validateProblem(p), "");
 }
 
+// multiply's unrolled three-row path against the dense product, with every pairing of block
+// heights it meets (contacts, scalar rows, a two-row block) and an absent block.
+TEST(Problem, BlockSparseMultiplyMatchesDenseForMixedBlockSizes) {
+  const std::vector<int> sizes = {3, 1, 3, 2, 3};
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(sizes);
+  std::vector<int> offset = {0};
+  for (int s : sizes) offset.push_back(offset.back() + s);
+  const int n = offset.back();
+  std::srand(7);
+  const Eigen::MatrixXd full = Eigen::MatrixXd::Random(n, n);
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < static_cast<int>(sizes.size()); ++i) {
+    B.beginRow();
+    for (int j = 0; j < static_cast<int>(sizes.size()); ++j) {
+      if ((i + 2 * j) % 5 == 1) continue;  // some blocks absent
+      const Eigen::MatrixXd block = full.block(offset[i], offset[j], sizes[i], sizes[j]);
+      B.addBlock(j, block);
+      W.block(offset[i], offset[j], sizes[i], sizes[j]) = block;
+    }
+  }
+  ASSERT_EQ(B.validate(), "");
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(n);
+  Eigen::VectorXd y;
+  B.multiply(x, y);
+  EXPECT_LE((y - W * x).cwiseAbs().maxCoeff(), 1e-14 * n);
+}
+
 TEST(Problem, SolverNamesRoundTrip) {
   for (const std::string& name : solverNames()) {
     SolverKind kind;

@@ -88,6 +88,8 @@ struct BlockSparseMatrix {
   Eigen::MatrixXd toDense() const;
   // y = A x (y resized).
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // y[0..2] = block row i (three rows) times x: multiply's hot case.
+  void multiplyThreeRows(int i, const double* x, double* y) const;
   // The stored diagonal block of block row i (row-major), or nullptr when none is stored.
   const double* diagonalValues(int i) const;
   // Checks the structure; returns an empty string when consistent.

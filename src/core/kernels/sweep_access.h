@@ -94,6 +94,16 @@ struct SparseAccess {
     }
     for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
       const ColumnBlock& b = column_blocks[s];
+      if (cols == 3 && b.rows == 3) {  // contact on contact: unrolled, the same sums in the same order
+        const double* v = b.v;
+        const double s0 = v[0] * delta[0] + v[1] * delta[1] + v[2] * delta[2];
+        const double s1 = v[3] * delta[0] + v[4] * delta[1] + v[5] * delta[2];
+        const double s2 = v[6] * delta[0] + v[7] * delta[1] + v[8] * delta[2];
+        dd[b.row0] += s0;
+        dd[b.row0 + 1] += s1;
+        dd[b.row0 + 2] += s2;
+        continue;
+      }
       for (int r = 0; r < b.rows; ++r) {
         double sum = 0.0;
         for (int c = 0; c < cols; ++c) sum += b.v[r * cols + c] * delta[c];
