@@ -92,13 +92,15 @@ struct SparseAccess {
       if (ctx.regularization != 0.0) dd[blk.offset] += ctx.regularization * change;
       return;
     }
+    // delta in locals: the stores into d could alias it, as far as the compiler knows.
+    const double a0 = delta[0], a1 = delta[1], a2 = cols == 3 ? delta[2] : 0.0;
     for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
       const ColumnBlock& b = column_blocks[s];
       if (cols == 3 && b.rows == 3) {  // contact on contact: unrolled, the same sums in the same order
         const double* v = b.v;
-        const double s0 = v[0] * delta[0] + v[1] * delta[1] + v[2] * delta[2];
-        const double s1 = v[3] * delta[0] + v[4] * delta[1] + v[5] * delta[2];
-        const double s2 = v[6] * delta[0] + v[7] * delta[1] + v[8] * delta[2];
+        const double s0 = v[0] * a0 + v[1] * a1 + v[2] * a2;
+        const double s1 = v[3] * a0 + v[4] * a1 + v[5] * a2;
+        const double s2 = v[6] * a0 + v[7] * a1 + v[8] * a2;
         dd[b.row0] += s0;
         dd[b.row0 + 1] += s1;
         dd[b.row0 + 2] += s2;
