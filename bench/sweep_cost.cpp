@@ -1,5 +1,5 @@
-// `work_precision --sweep-cost FILE`: what one Gauss-Seidel sweep and one dense Cholesky of W
-// cost on each problem of the study, the two figures auto's cost tests weigh against each other
+// `work_precision --sweep-cost FILE`: what one Gauss-Seidel sweep, one product with W (an apgd
+// iteration's main cost) and one dense Cholesky of W cost on each problem of the study, the two figures auto's cost tests weigh against each other
 // (portfolio.cpp: stickingCostSweeps counts a factorization in sweeps by flops, n³/3 against
 // 2 × W's stored entries). A sweep is timed as the difference of two nlgs solves run to a fixed
 // number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is Eigen's LLT of
@@ -61,7 +61,7 @@ Eigen::MatrixXd denseW(const lcs::core::Problem& problem) {
 }  // namespace
 
 void writeSweepCosts(const std::vector<BenchProblem>& problems, std::ostream& csv) {
-  csv << "family,problem,rows,storage,stored,blocks,sweep_s,cholesky_s,cholesky_sweeps,flop_model_sweeps\n";
+  csv << "family,problem,rows,storage,stored,blocks,sweep_s,product_s,cholesky_s,cholesky_sweeps,flop_model_sweeps\n";
   for (const BenchProblem& bp : problems) {
     const lcs::core::Problem& problem = bp.problem;
     const int n = problem.rowCount();
@@ -71,6 +71,8 @@ void writeSweepCosts(const std::vector<BenchProblem>& problems, std::ostream& cs
     const int blocks = sparse ? static_cast<int>(sparse->block_col.size()) : 1;
     const double sweep =
         (nlgsSeconds(problem, kManySweeps) - nlgsSeconds(problem, kFewSweeps)) / (kManySweeps - kFewSweeps);
+    Eigen::VectorXd x = Eigen::VectorXd::Ones(n), y(n);
+    const double product = fastest([&] { lcs::core::multiply(problem.W, x, y); }, 20, 0.02);
     Eigen::MatrixXd M = denseW(problem);
     M.diagonal().array() += 1.0;  // positive definite whatever W's rank: the time is the same
     Eigen::MatrixXd A(n, n);
@@ -82,7 +84,7 @@ void writeSweepCosts(const std::vector<BenchProblem>& problems, std::ostream& cs
         5, 0.05);
     const double flop_model = double(n) * n * n / 3.0 / (2.0 * std::max(1.0, stored));
     csv << bp.family << ',' << bp.name << ',' << n << ',' << (sparse ? "block-sparse" : "dense") << ','
-        << stored << ',' << blocks << ',' << fmt(sweep) << ',' << fmt(cholesky) << ',' << fmt(cholesky / sweep)
+        << stored << ',' << blocks << ',' << fmt(sweep) << ',' << fmt(product) << ',' << fmt(cholesky) << ',' << fmt(cholesky / sweep)
         << ',' << fmt(flop_model) << '\n';
     csv.flush();
   }
