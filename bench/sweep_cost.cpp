@@ -1,5 +1,6 @@
 // `work_precision --sweep-cost FILE`: what one Gauss-Seidel sweep, one product with W (an apgd
-// iteration's main cost) and one dense Cholesky of W cost on each problem of the study, the two figures auto's cost tests weigh against each other
+// iteration's main cost) and one dense Cholesky of W cost on each problem of the study. The
+// sweep and the Cholesky are the two figures auto's cost tests weigh against each other
 // (portfolio.cpp: stickingCostSweeps counts a factorization in sweeps by flops, n³/3 against
 // 2 × W's stored entries). A sweep is timed as the difference of two nlgs solves run to a fixed
 // number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is Eigen's LLT of
