@@ -195,10 +195,9 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // dense) where a sweep is one pass over it: a frictional Newton solve costs at least about n
 // sweeps (measured 1.7..17 n on the fc3d problems and the scenes). On an LCP newton's
 // active-set path is a few Cholesky steps: one of them (n/6 sweeps), at least the probe's
-// ten. apgd's iteration is one product with W, at most about a sweep (on a block-sparse W a
-// third to two thirds of one: the product's 3-row blocks are unrolled, a sweep also solves
-// each contact's local problem), and where Gauss-Seidel's rate is good apgd needs 2..6x its
-// iterations: fifty; before newton behind an apgd scout, the smaller of newton's and apgd's
+// ten. apgd's iteration is one product with W and the residual of its iterate, about a
+// sweep (0.6..1.7 of one on the study's block-sparse problems, the product alone 0.4), and
+// where Gauss-Seidel's rate is good apgd needs 2..6x its iterations: fifty; before newton behind an apgd scout, the smaller of newton's and apgd's
 // (the scout is the member the probe's sweeps would save first). Others (Lemke, prox, a fixed
 // plan): ten.
 int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction) {

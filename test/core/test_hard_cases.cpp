@@ -124,6 +124,62 @@ TEST(HardCases, ContactRepeatedWithOppositeNormals) {
   }
 }
 
+// A pyramid of boxes at rest, `base` boxes on the ground and each row on the one below,
+// offset by half a box: 16 points per face, 8 on each of the two boxes below (rank-deficient).
+World boxPyramid(int base, double mu) {
+  World world;
+  const Eigen::Vector3d size(1.0, 1.0, 0.5);
+  std::vector<int> below;
+  for (int row = 0; row < base; ++row) {
+    std::vector<int> level;
+    for (int i = 0; i < base - row; ++i) {
+      const Eigen::Vector3d com(i + 0.5 * row, 0.0, 0.25 + 0.5 * row);
+      level.push_back(world.add(box(1.0, size, com)));
+      for (const Eigen::Vector3d& p : bottomPoints(com, size, 16)) {
+        if (row == 0) {
+          world.contact(level.back(), -1, p, Eigen::Vector3d::UnitZ(), mu);
+          continue;
+        }
+        const double seam = world.bodies[below[i]].com.x() + 0.5;  // where the two boxes below meet
+        if (std::abs(p.x() - seam) < 1e-9) continue;
+        world.contact(level.back(), p.x() < seam ? below[i] : below[i + 1], p, Eigen::Vector3d::UnitZ(), mu);
+      }
+    }
+    below = level;
+  }
+  return world;
+}
+
+// apgd warm-started from a few Gauss-Seidel sweeps' forces (a simulator's last step solved
+// by another solver, or auto handing over): from such a start on rank-deficient contacts
+// its convex problem's residual sat on a plateau above the ratio that moves the De Saxcé
+// shift, for 3 900 and 8 000 iterations where apgd from zero needs 51 (apgd.cpp,
+// kPlateauIterations); now 280 and 310. Asserted: converged within 1 000 iterations, the
+// residual recomputed from the forces, and the ground carrying the pyramid's weight.
+TEST(HardCases, ApgdWarmStartedFromGaussSeidelForcesDoesNotStall) {
+  const World world = boxPyramid(4, 0.5);
+  const Problem p = world.problem();
+  double weight = 0.0;
+  for (const Body& b : world.bodies) weight += b.mass * kG;
+  for (int sweeps : {3, 5}) {
+    SolverParams gs = paramsFor(SolverKind::kNlgs, 1e-6, sweeps);
+    gs.initial_guess = true;
+    ContactSolver solver(gs);
+    const SolveResult start = solver.solve(p);
+    ASSERT_FALSE(start.converged) << sweeps << " sweeps: the case needs a start short of the tolerance";
+    SolverParams apgd = paramsFor(SolverKind::kApgd, 1e-6, 1000);
+    apgd.initial_guess = true;
+    solver.setParams(apgd);
+    const SolveResult r = solver.solve(p);
+    const std::string label = "apgd after " + std::to_string(sweeps) + " nlgs sweeps";
+    expectHonest(p, apgd, r, label);
+    EXPECT_TRUE(r.converged) << label << ": " << r.iterations << " iterations, " << r.message;
+    double ground = 0.0;
+    for (int b = 0; b < static_cast<int>(world.bodies.size()); ++b) ground += world.normalSum(b, -1, r.forces);
+    EXPECT_NEAR(ground, weight, 1e-3 * weight) << label;
+  }
+}
+
 // ---- mass ratios and scales -----------------------------------------------------------------
 
 // Two boxes stacked on the ground, 4 contacts per interface (24 rows, rank-deficient),

@@ -25,7 +25,9 @@
 // products already computed, and u(x_{k+1}) = W x_{k+1} + d_free gives the true Coulomb
 // residual of every iterate for free. The shift is updated (and the momentum reset)
 // when the convex problem's own residual drops below 0.3 times the Coulomb residual,
-// i.e. when the stale shift dominates the error.
+// i.e. when the stale shift dominates the error, or when that residual sits on a plateau
+// (kPlateauIterations): with W singular the convex problem for a given shift may have no
+// minimizer, and its residual then stops falling short of that ratio.
 //
 // When to use it: large frictional problems where each iteration must be cheap and
 // parallel-friendly (matrix-vector products only, no sequential sweep), at 1e-4..1e-8;
@@ -51,6 +53,15 @@ constexpr double kShiftUpdateRatio = 0.3;
 constexpr int kPowerIterations = 8;
 constexpr int kMaxBacktracks = 60;
 constexpr double kStepShrink = 0.9;
+// A convex problem whose residual has not fallen by 1 % in this many iterations is on a
+// plateau: the shift moves anyway, the momentum kept. Started from another solver's iterate
+// on rank-deficient contacts (a box pyramid after 3 Gauss-Seidel sweeps) the convex residual
+// stayed flat at 0.35 times the Coulomb residual, above the ratio that moves the shift, for
+// 2 000 iterations. An ill-conditioned convex problem (stacks with a mass ratio of 100) still
+// falls by 1 % within it; with 50 iterations, or with the momentum restarted as after a
+// solved convex problem, BoxesStack1's plateaus near 1e-6 cost 1.3-40x its iterations.
+constexpr int kPlateauIterations = 100;
+constexpr double kPlateauProgress = 0.99;
 
 enum class SetKind : std::uint8_t { kZero, kFree, kNormal, kCone };
 
@@ -196,6 +207,9 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   // long run costs; the start above stays the best iterate until one beats it.
   ApgdMemo* memo = ctx.apgd_memo;
   double L = 0.0, theta = 1.0;
+  // The convex problem's residual at its last 1 % decrease, and the iterations since.
+  double convex_mark = std::numeric_limits<double>::infinity();
+  int convex_stall = 0;
   if (memo != nullptr && memo->problem == ctx.problem && memo->regularization == ctx.regularization &&
       memo->returned.size() == n && memo->returned == lambda) {
     x = memo->x;
@@ -205,6 +219,8 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     shift = memo->shift;
     theta = memo->theta;
     L = memo->L;
+    convex_mark = memo->convex_mark;
+    convex_stall = memo->convex_stall;
   } else {
     L = curvatureEstimate(ctx, n);
     if (!(L > 0.0) || !std::isfinite(L)) L = 1.0;
@@ -224,6 +240,8 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     memo->shift = shift;
     memo->theta = theta;
     memo->L = L;
+    memo->convex_mark = convex_mark;
+    memo->convex_stall = convex_stall;
   };
   if (memo != nullptr) memo->clear();
   report.status = SolveStatus::kMaxIterations;
@@ -272,13 +290,24 @@ KernelReport runApgd(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       report.solver_error = residual;
       return report;
     }
-    if (shiftedResidual(sets, x_new, u, shift, scale) <= kShiftUpdateRatio * residual) {
-      // The convex problem is solved well enough: move the shift, restart the momentum.
+    const double convex_residual = shiftedResidual(sets, x_new, u, shift, scale);
+    if (convex_residual <= kPlateauProgress * convex_mark) {
+      convex_mark = convex_residual;
+      convex_stall = 0;
+    } else {
+      ++convex_stall;
+    }
+    const bool solved = convex_residual <= kShiftUpdateRatio * residual;
+    if (solved || convex_stall >= kPlateauIterations) {
       deSaxceShift(sets, u, shift);
+      convex_mark = std::numeric_limits<double>::infinity();
+      convex_stall = 0;
+    }
+    if (solved) {  // the convex problem is solved well enough: restart the momentum
       y = x_new;
       Wy = Wx_new;
       theta = 1.0;
-    } else {
+    } else {  // also after a plateau's new shift, which moves little
       y = x_new + beta * (x_new - x);
       Wy = (1.0 + beta) * Wx_new - beta * Wx;
       theta = restart ? 1.0 : theta_next;

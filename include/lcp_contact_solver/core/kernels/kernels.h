@@ -33,6 +33,8 @@ struct ApgdMemo {
   Eigen::VectorXd returned;  // the λ the call returned (its best iterate)
   Eigen::VectorXd x, Wx, y, Wy, shift;
   double theta = 1.0, L = 0.0;
+  double convex_mark = 0.0;  // the convex problem's plateau test (apgd.cpp)
+  int convex_stall = 0;
   void clear() { problem = nullptr; }
 };
 
