@@ -44,6 +44,31 @@ void expectFinite(const SolveResult& r, const std::string& what) {
   EXPECT_TRUE(std::isfinite(r.residual)) << what;
 }
 
+// After a failed apgd scout, Gauss-Seidel goes on from the probe's last iterate where the
+// probe's last stage said it needed at most half of newton's lower bound (n sweeps): a
+// 72-row island of Capsules-i101-404 (multi-point capsule contacts) at 1e-6, whose probe
+// stops 2.3x above the tolerance, whose scout fails, and where newton would take 3x the
+// time nlgs takes alone. Independently: the residual recomputed from the forces.
+TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIterate) {
+  const Problem whole = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "Capsules-i101-404.dat").string());
+  const Islands islands = findIslands(whole);
+  const std::vector<int> offsets = whole.rowOffsets();
+  Problem island;
+  for (const std::vector<int>& contacts : islands.contacts) {
+    Problem candidate = islandProblem(whole, offsets, contacts);
+    if (candidate.rowCount() == 72) {
+      island = std::move(candidate);
+      break;
+    }
+  }
+  ASSERT_EQ(island.rowCount(), 72) << "the case needs Capsules-i101-404's 72-row island";
+  const double tol = 1e-6;
+  const SolveResult r = solveProblem(island, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs->apgd->nlgs");
+  EXPECT_LE(solvers_test::recomputedResidual(island, r.forces), tol);
+}
+
 // Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
 TEST(SharedProblemsSolvers, NewtonReachesTenDigitsOnTheRankDeficientStacks) {
   for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat"}) {
