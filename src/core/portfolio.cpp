@@ -197,9 +197,9 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // active-set path is a few Cholesky steps: one of them (n/6 sweeps), at least the probe's
 // ten. apgd's iteration is one product with W and the residual of its iterate, about a
 // sweep (0.6..1.7 of one on the study's block-sparse problems, the product alone 0.4), and
-// where Gauss-Seidel's rate is good apgd needs 2..6x its iterations: fifty; before newton behind an apgd scout, the smaller of newton's and apgd's
-// (the scout is the member the probe's sweeps would save first). Others (Lemke, prox, a fixed
-// plan): ten.
+// where Gauss-Seidel's rate is good apgd needs 2..6x its iterations: fifty; before newton
+// behind an apgd scout, the smaller of newton's and apgd's (the scout is the member the
+// probe's sweeps would save first). Others (Lemke, prox, a fixed plan): ten.
 int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction) {
   switch (plan.front()) {
     case SolverKind::kNewton: {

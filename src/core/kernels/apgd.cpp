@@ -58,8 +58,8 @@ constexpr double kStepShrink = 0.9;
 // on rank-deficient contacts (a box pyramid after 3 Gauss-Seidel sweeps) the convex residual
 // stayed flat at 0.35 times the Coulomb residual, above the ratio that moves the shift, for
 // 2 000 iterations. An ill-conditioned convex problem (stacks with a mass ratio of 100) still
-// falls by 1 % within it; with 50 iterations, or with the momentum restarted as after a
-// solved convex problem, BoxesStack1's plateaus near 1e-6 cost 1.3-40x its iterations.
+// falls by 1 % within it. With 50 iterations BoxesStack1's cold solves took up to 1.5x their
+// iterations, and with the momentum restarted as after a solved convex problem 20-50x.
 constexpr int kPlateauIterations = 100;
 constexpr double kPlateauProgress = 0.99;
 
