@@ -59,7 +59,8 @@ constexpr double kStepShrink = 0.9;
 // stayed flat at 0.35 times the Coulomb residual, above the ratio that moves the shift, for
 // 2 000 iterations. An ill-conditioned convex problem (stacks with a mass ratio of 100) still
 // falls by 1 % within it. With 50 iterations BoxesStack1's cold solves took up to 1.5x their
-// iterations, and with the momentum restarted as after a solved convex problem 20-50x.
+// iterations, and with no halving in 50 as the plateau and the momentum restarted as after a
+// solved convex problem, 20-50x.
 constexpr int kPlateauIterations = 100;
 constexpr double kPlateauProgress = 0.99;
 
