@@ -8,6 +8,10 @@
 #include "lcp_contact_solver/core/kernels/kernels.h"
 #include "lcp_contact_solver/core/residual.h"
 
+// GaussSeidelMemo's definition (private to the core): the kernel-level test below hands one
+// to the Gauss-Seidel kernels as auto does.
+#include "../../src/core/kernels/local_contact_laws.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -988,6 +992,71 @@ SolveContext kernelContext(const Problem& p, const SolverParams& sp) {
   ctx.mu = effectiveMu(p, sp.mu);
   ctx.ignored.assign(p.contacts.size(), false);
   return ctx;
+}
+
+// Gauss-Seidel called again from exactly the λ its last call ended with, through one memo
+// (auto's probe stages and slices), goes on with the d it maintained (KeptD) instead of
+// forming W λ again: sweep for sweep the iterates of one long call, bit for bit, its exact
+// refresh every 50 sweeps included. From any other λ it forms d afresh (as a call with a new
+// memo does, bit for bit). Dense W, block-sparse W and one-row contacts (the scalar-row
+// sweep); the converged answer checked against d recomputed from W and d_free.
+TEST(Portfolio, GaussSeidelContinuedThroughItsMemoSweepsAsOneCall) {
+  const Problem frictional = solvers_test::randomFrictionalProblem(20, 11, 0.5, 1e-6);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Random(12, 14);
+  const Eigen::MatrixXd spd = A * A.transpose() / 14.0 + 1e-2 * Eigen::MatrixXd::Identity(12, 12);
+  const Eigen::VectorXd q = -Eigen::VectorXd::LinSpaced(12, 0.2, 1.0);
+  const std::vector<std::pair<std::string, Problem>> problems = {
+      {"dense", frictional}, {"block-sparse", solvers_test::toBlockSparse(frictional)},
+      {"scalar rows", solvers_test::toBlockSparse(frictionlessLcp(spd, q))}};
+  for (const auto& [name, p] : problems) {
+    SCOPED_TRACE(name);
+    SolverParams long_run;
+    long_run.solver = SolverKind::kNlgs;
+    long_run.tolerance = 1e-300;  // never met: every call runs its maxIt sweeps
+    long_run.maxIt = 56;  // past the refresh at 50, before round-off decides which iterate is best
+    const SolveContext one = kernelContext(p, long_run);
+    Eigen::VectorXd whole = Eigen::VectorXd::Zero(p.rowCount());
+    runNonlinearGaussSeidel(one, whole);
+
+    SolverParams chunk = long_run;
+    chunk.maxIt = 8;
+    GaussSeidelMemo memo;
+    SolveContext chunked = kernelContext(p, chunk);
+    chunked.gs_memo = &memo;
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(p.rowCount());
+    for (int k = 0; k < long_run.maxIt / chunk.maxIt; ++k) {
+      runNonlinearGaussSeidel(chunked, x);
+      // The call returned its last iterate (not an earlier, better one), so the next starts
+      // where the long call goes on: what makes the comparison below sweep for sweep.
+      ASSERT_EQ(memo.kept.problem, &p) << "call " << k;
+      ASSERT_EQ(memo.kept.lambda, x) << "call " << k;
+    }
+    EXPECT_EQ(x, whole);
+
+    // Moved off the kept λ: d formed afresh, as with a new memo.
+    x[0] += 0.1;
+    Eigen::VectorXd fresh = x;
+    GaussSeidelMemo new_memo;
+    SolveContext unkept = chunked;
+    unkept.gs_memo = &new_memo;
+    runNonlinearGaussSeidel(chunked, x);
+    runNonlinearGaussSeidel(unkept, fresh);
+    EXPECT_EQ(x, fresh);
+
+    // To convergence in slices: the residual it reports is that of d recomputed from scratch.
+    SolverParams tight = chunk;
+    tight.tolerance = 1e-9;
+    SolveContext to_tolerance = kernelContext(p, tight);
+    to_tolerance.gs_memo = &memo;
+    KernelReport r;
+    for (int k = 0; k < 1000 && r.status != SolveStatus::kConverged; ++k) r = runNonlinearGaussSeidel(to_tolerance, x);
+    ASSERT_EQ(r.status, SolveStatus::kConverged);
+    Eigen::VectorXd d;
+    multiply(p.W, x, d);
+    d += p.d_free;
+    EXPECT_NEAR(naturalMapResidual(p, effectiveMu(p, tight.mu), x, d), r.solver_error, 1e-12);
+    EXPECT_LE(r.solver_error, 1e-9);
+  }
 }
 
 // A member on trial (SolveContext::trialPassed, auto's first slice of a member handed a

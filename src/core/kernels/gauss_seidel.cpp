@@ -40,6 +40,7 @@
 #include <algorithm>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <variant>
 
 namespace lcp_contact_solver::core {
@@ -53,9 +54,14 @@ constexpr int kRefreshInterval = 50;
 
 bool allFinite(const Eigen::VectorXd& v) { return v.allFinite(); }
 
+// `kept` (a caller's memo, dense and block-sparse W only): the d a previous call ended with,
+// taken where this call starts from that call's last iterate, and this call's own d kept.
 template <class Access>
 KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBlock>& blocks, Access& access,
-                            Eigen::VectorXd& lambda, const FrictionPolygon* polygon) {
+                            Eigen::VectorXd& lambda, const FrictionPolygon* polygon, KeptD* kept = nullptr) {
+  // The dense and block-sparse accesses maintain d itself: their refresh is W λ + d_free
+  // (SolveContext::computeD), so a d just refreshed is the exact one.
+  constexpr bool kMaintainedD = !std::is_same_v<Access, BodyAccess>;
   const SolverParams& params = *ctx.params;
   const double omega = params.sor;
   // The problem solved: the disc's natural map, or the pyramid's (friction_pyramid.h).
@@ -69,7 +75,14 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
   double best_residual = std::numeric_limits<double>::infinity();
   double delta[6];
   double d_c[6];
-  access.refresh(lambda);
+  int since_refresh = 0;
+  if (!(kept != nullptr && kept->take(ctx, lambda, access.d, &since_refresh))) access.refresh(lambda);
+  // The last iterate's d kept for the next call, before λ becomes the best iterate.
+  auto keepD = [&] {
+    if constexpr (kMaintainedD) {
+      if (kept != nullptr) kept->keep(ctx, lambda, access.d, since_refresh);
+    }
+  };
   for (int sweep = 1; sweep <= params.maxIt; ++sweep) {
     double sofa_error = 0.0;
     for (const LocalBlock& blk : blocks) {
@@ -89,7 +102,10 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
                        "overflows: minW excludes such contacts); best iterate returned";
       return report;
     }
-    if (sweep % kRefreshInterval == 0) access.refresh(lambda);
+    if (++since_refresh == kRefreshInterval) {
+      access.refresh(lambda);
+      since_refresh = 0;
+    }
     const bool need_residual = params.stopping_rule == StoppingRule::kResidual || params.displayDebug;
     double residual = 0.0;
     if (need_residual) {
@@ -106,23 +122,36 @@ KernelReport sweepUntilDone(const SolveContext& ctx, const std::vector<LocalBloc
       best = lambda;
       if (sofa_error < params.tolerance) {
         report.status = SolveStatus::kConverged;
+        keepD();
         return report;
       }
     } else {
       report.solver_error = residual;
       if (residual <= params.tolerance) {
         access.refresh(lambda);
-        Eigen::VectorXd d_exact;
-        ctx.computeD(lambda, d_exact);
-        if (confirmConverged(report, residualOf(lambda, d_exact), params.tolerance)) return report;
+        since_refresh = 0;
+        bool confirmed;
+        if constexpr (kMaintainedD) {
+          confirmed = confirmConverged(report, residualOf(lambda, access.currentD(lambda)), params.tolerance);
+        } else {
+          Eigen::VectorXd d_exact;
+          ctx.computeD(lambda, d_exact);
+          confirmed = confirmConverged(report, residualOf(lambda, d_exact), params.tolerance);
+        }
+        if (confirmed) {
+          keepD();
+          return report;
+        }
       }
     }
     // At most one clock read per sweep.
     if (sweep < params.maxIt && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
+      keepD();
       endOnTimeBudget(report, lambda, best, params.time_budget, sweep);
       return report;
     }
   }
+  keepD();
   endOnMaxIt(report, lambda, best, params.maxIt);
   return report;
 }
@@ -160,13 +189,21 @@ KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
     access.first_block = blocks.data();
     return sweepUntilDone(ctx, blocks, access, lambda, polygon);
   }
+  KeptD* kept = memo != nullptr ? &memo->kept : nullptr;
   if (const auto* dense = std::get_if<Eigen::MatrixXd>(&ctx.problem->W)) {
     DenseAccess access{*dense, ctx, Eigen::VectorXd()};
-    return sweepUntilDone(ctx, blocks, access, lambda, polygon);
+    return sweepUntilDone(ctx, blocks, access, lambda, polygon, kept);
   }
-  SparseAccess access(std::get<BlockSparseMatrix>(ctx.problem->W), ctx);
+  const auto& sparse = std::get<BlockSparseMatrix>(ctx.problem->W);
+  SparseColumnIndex own_index;
+  SparseColumnIndex& index = memo != nullptr ? memo->columns_by_block : own_index;
+  if (memo == nullptr || memo->index_problem != ctx.problem) {
+    index.build(sparse);
+    if (memo != nullptr) memo->index_problem = ctx.problem;
+  }
+  SparseAccess access{sparse, ctx, index, Eigen::VectorXd()};
   access.first_block = blocks.data();
-  return sweepUntilDone(ctx, blocks, access, lambda, polygon);
+  return sweepUntilDone(ctx, blocks, access, lambda, polygon, kept);
 }
 
 }  // namespace

@@ -113,3 +113,41 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
 }
 
 }  // namespace lcp_contact_solver::core::local_laws
+
+namespace lcp_contact_solver::core {
+
+void SparseColumnIndex::build(const BlockSparseMatrix& W) {
+  const int nb = W.blockCount();
+  start.assign(nb + 1, 0);
+  for (int j : W.block_col) ++start[j + 1];
+  for (int j = 0; j < nb; ++j) start[j + 1] += start[j];
+  blocks.resize(W.block_col.size());
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int i = 0; i < nb; ++i) {
+    for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s) {
+      const int j = W.block_col[s];
+      blocks[fill[j]++] = {W.block_offset[i], W.block_offset[i + 1] - W.block_offset[i],
+                           W.values.data() + W.value_start[s]};
+    }
+  }
+}
+
+bool KeptD::take(const SolveContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& out, int* since_refresh) {
+  if (problem != ctx.problem || regularization != ctx.regularization || lambda.size() != x.size() ||
+      lambda != x)
+    return false;
+  out.swap(d);
+  *since_refresh = sweeps;
+  problem = nullptr;  // given away
+  return true;
+}
+
+void KeptD::keep(const SolveContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& d_now, int since_refresh) {
+  problem = ctx.problem;
+  regularization = ctx.regularization;
+  lambda = x;
+  d.swap(d_now);
+  sweeps = since_refresh;
+}
+
+}  // namespace lcp_contact_solver::core

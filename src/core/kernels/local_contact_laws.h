@@ -401,6 +401,34 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
 
 namespace lcp_contact_solver::core {
 
+// A block-sparse W's blocks by block column (sweep_access.h's SparseAccess walks a contact's
+// column to update d), pointing into W's values.
+struct SparseColumnIndex {
+  struct Block {
+    int row0;         // first row of the block row
+    int rows;         // its height
+    const double* v;  // the block's values, row-major
+  };
+  std::vector<int> start;     // per block column, into `blocks`
+  std::vector<Block> blocks;  // ordered by block column
+  void build(const BlockSparseMatrix& W);
+};
+
+// The d = W λ + d_free a sweep maintained when its call ended, and the λ it belongs to (the
+// last iterate, which the call returns unless an earlier one was better): a call that starts
+// from exactly that λ on the same problem goes on with it instead of forming W λ again.
+// auto's probe stages and slices are such calls, each a product with W otherwise.
+struct KeptD {
+  const Problem* problem = nullptr;  // none: nothing kept
+  double regularization = 0.0;
+  Eigen::VectorXd d, lambda;
+  int sweeps = 0;  // since d was last recomputed exactly (the drift refresh counts on)
+  // Whether d belongs to `x` on ctx's problem: then `d` is swapped into `out`.
+  bool take(const SolveContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& out, int* since_refresh);
+  // Keeps `d` (swapped out) as belonging to `x`, `since_refresh` sweeps after an exact d.
+  void keep(const SolveContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& d_now, int since_refresh);
+};
+
 // kernels.h: the blocks of one problem, regularization and polygon (facets; 0 for the disc),
 // and for one-row contacts the scalar-row sweep's data (scalar_rows.h).
 struct GaussSeidelMemo {
@@ -408,6 +436,8 @@ struct GaussSeidelMemo {
   double regularization = 0.0;
   int facets = 0;
   std::vector<local_laws::LocalBlock> blocks;
+  const Problem* index_problem = nullptr;  // none: no column index
+  SparseColumnIndex columns_by_block;
 
   const Problem* rows_problem = nullptr;  // none: no scalar rows
   double rows_regularization = 0.0;
@@ -415,7 +445,9 @@ struct GaussSeidelMemo {
   std::vector<double> inverse;      // 1 / (W_ii + r)
   std::vector<std::uint8_t> kind;   // each row's kind (scalar_rows.cpp)
 
-  void clear() { problem = rows_problem = nullptr; }
+  KeptD kept;
+
+  void clear() { problem = rows_problem = index_problem = kept.problem = nullptr; }
 };
 
 }  // namespace lcp_contact_solver::core

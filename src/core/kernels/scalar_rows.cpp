@@ -137,8 +137,14 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
     return std::isfinite(residual) ? residual : std::numeric_limits<double>::max();
   };
   const bool sofa = params.stopping_rule == StoppingRule::kSofa;
+  // d from the previous call where this one starts from its last iterate (KeptD).
   Eigen::VectorXd d;
-  ctx.computeD(lambda, d);
+  int since_refresh = 0;
+  KeptD* kept = memo != nullptr ? &memo->kept : nullptr;
+  if (!(kept != nullptr && kept->take(ctx, lambda, d, &since_refresh))) ctx.computeD(lambda, d);
+  auto keepD = [&] {
+    if (kept != nullptr) kept->keep(ctx, lambda, d, since_refresh);
+  };
   Eigen::VectorXd best = lambda;
   double best_residual = std::numeric_limits<double>::infinity();
   double* l = lambda.data();
@@ -184,7 +190,10 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
                        "overflows: minW excludes such contacts); best iterate returned";
       return report;
     }
-    if (sweep % kRefreshInterval == 0) ctx.computeD(lambda, d);
+    if (++since_refresh == kRefreshInterval) {
+      ctx.computeD(lambda, d);
+      since_refresh = 0;
+    }
     dd = d.data();
     const bool need_residual = !sofa || params.displayDebug;
     double residual = 0.0;
@@ -201,21 +210,28 @@ KernelReport runScalarRowGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& l
       best = lambda;
       if (sofa_error < params.tolerance) {
         report.status = SolveStatus::kConverged;
+        keepD();
         return report;
       }
     } else {
       report.solver_error = residual;
       if (residual <= params.tolerance) {
         ctx.computeD(lambda, d);
+        since_refresh = 0;
         dd = d.data();
-        if (confirmConverged(report, residualOf(lambda, d), params.tolerance)) return report;
+        if (confirmConverged(report, residualOf(lambda, d), params.tolerance)) {
+          keepD();
+          return report;
+        }
       }
     }
     if (sweep < params.maxIt && ctx.deadlinePassed()) {
+      keepD();
       endOnTimeBudget(report, lambda, best, params.time_budget, sweep);
       return report;
     }
   }
+  keepD();
   endOnMaxIt(report, lambda, best, params.maxIt);
   return report;
 }

@@ -41,36 +41,14 @@ struct DenseAccess {
 
 // Block-sparse W: d is maintained like the dense case, through the block columns. The
 // blocks of column j (block row i, values row-major rows_i × cols_j) are indexed once per
-// solve, so a contact's change updates d with one contiguous walk over its column and a
+// problem (SparseColumnIndex, in a caller's memo), so a contact's change updates d with one contiguous walk over its column and a
 // contact whose force does not move (an open contact staying open) costs nothing; d is
 // recomputed exactly every kRefreshInterval sweeps and before declaring convergence.
 struct SparseAccess {
   const BlockSparseMatrix& W;
   const SolveContext& ctx;
+  const SparseColumnIndex& columns;  // W's blocks by block column (a caller's memo or the call's own)
   Eigen::VectorXd d;
-  struct ColumnBlock {
-    int row0;         // first row of the block row
-    int rows;         // its height
-    const double* v;  // the block's values
-  };
-  std::vector<int> column_start;           // per block column, into `column_blocks`
-  std::vector<ColumnBlock> column_blocks;  // blocks ordered by block column
-
-  SparseAccess(const BlockSparseMatrix& w, const SolveContext& context) : W(w), ctx(context) {
-    const int nb = W.blockCount();
-    column_start.assign(nb + 1, 0);
-    for (int j : W.block_col) ++column_start[j + 1];
-    for (int j = 0; j < nb; ++j) column_start[j + 1] += column_start[j];
-    column_blocks.resize(W.block_col.size());
-    std::vector<int> fill(column_start.begin(), column_start.end() - 1);
-    for (int i = 0; i < nb; ++i) {
-      for (int s = W.row_start[i]; s < W.row_start[i + 1]; ++s) {
-        const int j = W.block_col[s];
-        column_blocks[fill[j]++] = {W.block_offset[i], W.block_offset[i + 1] - W.block_offset[i],
-                                    W.values.data() + W.value_start[s]};
-      }
-    }
-  }
 
   void refresh(const Eigen::VectorXd& lambda) { ctx.computeD(lambda, d); }
   void contactD(const LocalBlock& blk, const Eigen::VectorXd&, double* out) const {
@@ -85,8 +63,8 @@ struct SparseAccess {
     double* dd = d.data();
     if (cols == 1) {  // a scalar row's column: no inner loop over columns
       const double change = delta[0];
-      for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
-        const ColumnBlock& b = column_blocks[s];
+      for (int s = columns.start[j]; s < columns.start[j + 1]; ++s) {
+        const SparseColumnIndex::Block& b = columns.blocks[s];
         for (int r = 0; r < b.rows; ++r) dd[b.row0 + r] += b.v[r] * change;
       }
       if (ctx.regularization != 0.0) dd[blk.offset] += ctx.regularization * change;
@@ -94,8 +72,8 @@ struct SparseAccess {
     }
     // delta in locals: the stores into d could alias it, as far as the compiler knows.
     const double a0 = delta[0], a1 = delta[1], a2 = cols == 3 ? delta[2] : 0.0;
-    for (int s = column_start[j]; s < column_start[j + 1]; ++s) {
-      const ColumnBlock& b = column_blocks[s];
+    for (int s = columns.start[j]; s < columns.start[j + 1]; ++s) {
+      const SparseColumnIndex::Block& b = columns.blocks[s];
       if (cols == 3 && b.rows == 3) {  // contact on contact: unrolled, the same sums in the same order
         const double* v = b.v;
         const double s0 = v[0] * a0 + v[1] * a1 + v[2] * a2;

@@ -18,9 +18,11 @@
 namespace lcp_contact_solver::core {
 
 // The per-contact data the Gauss-Seidel kernels form from W alone (local_contact_laws.h),
-// kept by a caller that runs them several times on one problem: auto's probe stages and
-// slices, newton's warm-up and bursts. Its owner clears it whenever the problem, μ, the
-// ignored contacts or the regularization may have changed.
+// and the d = W λ + d_free their last call maintained with the λ it belongs to (a call from
+// exactly that λ goes on with it instead of a product with W), kept by a caller that runs them
+// several times on one problem: auto's probe stages and slices, newton's warm-up and bursts.
+// Its owner clears it whenever the problem, μ, the ignored contacts or the regularization may
+// have changed.
 struct GaussSeidelMemo;
 
 // APGD's state at the end of a call (apgd.cpp): iterate, extrapolated point, momentum, step
