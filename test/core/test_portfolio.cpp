@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -1002,7 +1003,11 @@ SolveContext kernelContext(const Problem& p, const SolverParams& sp) {
 // sweep); the converged answer checked against d recomputed from W and d_free.
 TEST(Portfolio, GaussSeidelContinuedThroughItsMemoSweepsAsOneCall) {
   const Problem frictional = solvers_test::randomFrictionalProblem(20, 11, 0.5, 1e-6);
-  Eigen::MatrixXd A = Eigen::MatrixXd::Random(12, 14);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd A(12, 14);
+  for (int i = 0; i < A.rows(); ++i)
+    for (int j = 0; j < A.cols(); ++j) A(i, j) = u(rng);
   const Eigen::MatrixXd spd = A * A.transpose() / 14.0 + 1e-2 * Eigen::MatrixXd::Identity(12, 12);
   const Eigen::VectorXd q = -Eigen::VectorXd::LinSpaced(12, 0.2, 1.0);
   const std::vector<std::pair<std::string, Problem>> problems = {

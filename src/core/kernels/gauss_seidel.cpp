@@ -201,7 +201,7 @@ KernelReport runGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda,
     index.build(sparse);
     if (memo != nullptr) memo->index_problem = ctx.problem;
   }
-  SparseAccess access{sparse, ctx, index, Eigen::VectorXd()};
+  SparseAccess access{ctx, index, Eigen::VectorXd()};
   access.first_block = blocks.data();
   return sweepUntilDone(ctx, blocks, access, lambda, polygon, kept);
 }

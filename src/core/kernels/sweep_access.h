@@ -41,11 +41,11 @@ struct DenseAccess {
 
 // Block-sparse W: d is maintained like the dense case, through the block columns. The
 // blocks of column j (block row i, values row-major rows_i × cols_j) are indexed once per
-// problem (SparseColumnIndex, in a caller's memo), so a contact's change updates d with one contiguous walk over its column and a
-// contact whose force does not move (an open contact staying open) costs nothing; d is
-// recomputed exactly every kRefreshInterval sweeps and before declaring convergence.
+// problem (SparseColumnIndex, kept in a caller's memo), so a contact's change updates d with
+// one contiguous walk over its column and a contact whose force does not move (an open
+// contact staying open) costs nothing; d is recomputed exactly every kRefreshInterval sweeps
+// and before declaring convergence.
 struct SparseAccess {
-  const BlockSparseMatrix& W;
   const SolveContext& ctx;
   const SparseColumnIndex& columns;  // W's blocks by block column (a caller's memo or the call's own)
   Eigen::VectorXd d;
