@@ -101,10 +101,7 @@ std::string prepareBlocks(const SolveContext& ctx, std::vector<LocalBlock>& bloc
     const Eigen::Matrix2d T = D.block<2, 2>(1, 1);
     const double scale = T.cwiseAbs().maxCoeff();
     blk.tangent_symmetric = std::abs(T(0, 1) - T(1, 0)) <= 1e-12 * scale;
-    // The closed form for 2 × 2 (computeDirect): the iterative solver's tridiagonalization
-    // and QR sweeps cost a few percent of a small solve, once per contact.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
-    eig.computeDirect(0.5 * (T + T.transpose()));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (T + T.transpose()));
     blk.tangent_basis = eig.eigenvectors();
     blk.tangent_eigen = eig.eigenvalues();
     const double a_max = blk.tangent_eigen.maxCoeff();
