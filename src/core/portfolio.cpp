@@ -589,8 +589,11 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
   }
   // Above the small size the multi-point share is measured only where the plan reads it,
   // in a second pass (firstOrderBySize): on a MuJoCo cloth's dense 265 rows, which go to
-  // Gauss-Seidel anyway, the pass with the sets had cost 15 % of the sweeps' time.
-  const bool one_pass = !f.sparse && f.rows <= kAutoNewtonRows;
+  // Gauss-Seidel anyway, the pass with the sets had cost 15 % of the sweeps' time. Up to it,
+  // dense or block-sparse, the sets come with the first pass: a second pass over every stored
+  // block costs more than their hashes (a 48-row box pyramid: 8 % of auto's instructions
+  // went to the two passes).
+  const bool one_pass = f.rows <= kAutoNewtonRows;
   if (!f.body_form) {
     const Coupling c = normalCoupling(ctx, friction, one_pass);
     f.coupling = c.kappa;

@@ -867,6 +867,33 @@ TEST(Portfolio, DominantLcpStartsWithGaussSeidelAndOneContactSkipsTheFeatures) {
   EXPECT_LE(recomputedResidual(one, o), 1e-10);
 }
 
+// One contact alone: Gauss-Seidel's local step is its exact solve, so auto's probe ends the
+// solve with nlgs's answer, bit for bit. Where the user's over-relaxation overshoots that
+// solve on every sweep the probe does not end it, and the portfolio must still converge.
+TEST(Portfolio, OneContactIsGaussSeidelsAnswerAndOverRelaxedStillConverges) {
+  World w;
+  w.add(hard::box(1.0, Eigen::Vector3d(1.0, 1.0, 1.0), Eigen::Vector3d(0.0, 0.0, 0.5)));
+  w.contact(0, -1, Eigen::Vector3d(0.2, 0.1, 0.0), Eigen::Vector3d(0.1, 0.0, 1.0).normalized(), 0.3);
+  Problem one = w.problem();
+  one.d_free = Eigen::Vector3d(-0.4, 0.3, -0.2);  // pressed and sliding: the cone's edge
+  const SolveResult a = solveProblem(one, params(SolverKind::kAuto, 1e-10, 1000));
+  const SolveResult g = solveProblem(one, params(SolverKind::kNlgs, 1e-10, 1000));
+  EXPECT_EQ(a.solver, "auto:nlgs");
+  ASSERT_TRUE(a.converged) << a.message;
+  ASSERT_TRUE(g.converged) << g.message;
+  EXPECT_EQ(a.iterations, g.iterations);
+  EXPECT_EQ(a.forces, g.forces);
+  EXPECT_GT(std::abs(a.forces(1)) + std::abs(a.forces(2)), 0.0);  // friction acts
+  EXPECT_LE(recomputedResidual(one, a), 1e-10);
+
+  SolverParams over = params(SolverKind::kAuto, 1e-10, 1000);
+  over.sor = 1.9;  // each sweep lands 0.9 of the way past the exact local solve
+  const SolveResult o = solveProblem(one, over);
+  ASSERT_TRUE(o.converged) << o.message;
+  EXPECT_GT(o.iterations, 3);  // not ended by the first sweeps
+  EXPECT_LE(recomputedResidual(one, o), 1e-10);
+}
+
 // A block-sparse LCP W is presumed symmetric (assembled J M⁻¹ Jᵀ) and goes to newton first,
 // which tests the symmetry itself: a non-symmetric, coupled one must still be solved.
 TEST(Portfolio, NonSymmetricBlockSparseLcpIsStillSolved) {
