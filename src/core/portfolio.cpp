@@ -616,8 +616,8 @@ bool mostlyBilateral(const SolveContext& ctx) {
 }
 
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
-Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_symmetric,
-              const PositiveDiagonal& positive_diagonal) {
+Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_holds,
+              int known_symmetric, const PositiveDiagonal& positive_diagonal) {
   using K = SolverKind;
   const SolverParams& p = *ctx.params;
   if (hasExtendedFriction(*ctx.problem)) return {K::kNlgs};
@@ -673,6 +673,9 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, int known_sym
       return {K::kNewton, K::kNlgs, K::kApgd, K::kProx};
     if ((dominant && f.rows <= kAutoSmallRows) || gs_suits)
       return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+    // Multi-point contacts whose points are spread over their faces (no nearly parallel normal
+    // rows), most rows contacts: apgd keeps its place at two digits too (runPortfolio).
+    *apgd_holds = f.multi_point && !f.rank_deficient && !mostlyBilateral(ctx);
     return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   }
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
@@ -856,10 +859,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   members.clear();
   Plan plan;                     // measured once, when first needed
   bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton (residual rule only)
+  bool plan_apgd_holds = false;  // autoPlan's: at two digits the probe's rate leaves apgd first
   int known_symmetric = -1;      // W's symmetry once measured (LCPs)
   const PositiveDiagonal positive_diagonal(ctx);
   auto planned = [&]() -> const Plan& {
-    if (plan.empty()) plan = autoPlan(ctx, friction, &plan_scout, known_symmetric, positive_diagonal);
+    if (plan.empty())
+      plan = autoPlan(ctx, friction, &plan_scout, &plan_apgd_holds, known_symmetric, positive_diagonal);
     return plan;
   };
   auto startPlan = [&] {
@@ -1261,10 +1266,18 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // first stage (the first sweeps from the start fall faster than the later ones: a box
       // pyramid whose three sweeps promised 38 more took 114) and the sweeps cost less than
       // newton (newtonCheaperThanSweeps; the rule below otherwise): apgd's cost is not known,
-      // these sweeps' is.
+      // these sweeps' is, and the probe's would be lost (LMGC at 1e-3 with apgd kept first:
+      // 1.6x the time). Not at two digits where the plan says apgd holds (autoPlan: multi-point
+      // contacts spread over their faces, most rows contacts): there an apgd iteration, one
+      // product with the block-sparse W, costs less than a sweep and the two need about as many
+      // (box pyramids of 15-136 cubes at 1e-2: 22-139 sweeps against 21-82 iterations, apgd
+      // 0.45-0.77x nlgs's time), where nearly parallel normal rows (stacks with four close
+      // points per face) or joints (MuJoCo's hammock: 82 sweeps against 499 iterations) leave
+      // Gauss-Seidel ahead.
       const bool gs_in_slice = probe_sweeps + needed <= firstSlice(probe_kind);
       const bool rate_past_first_stage = probe_sweeps > kAutoProbeFirst;
-      if (members.front().kind == SolverKind::kApgd && !members.front().scout && gs_in_slice &&
+      const bool apgd_holds = params.tolerance >= kAutoTwoDigits && plan_apgd_holds;
+      if (members.front().kind == SolverKind::kApgd && !members.front().scout && gs_in_slice && !apgd_holds &&
           (params.tolerance >= kAutoTwoDigits ||
            (params.tolerance >= kAutoTightTolerance && rate_past_first_stage &&
             !newtonCheaperThanSweeps(ctx, probe_sweeps + needed))))

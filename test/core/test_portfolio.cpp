@@ -46,6 +46,33 @@ Problem boxStack(int boxes, int k, double ratio, double push, double mu) {
   return w.problem();
 }
 
+// A pyramid of unit cubes, `base` on the ground: each cube above rests on two, on four points
+// at the corners of each overlap (a half face), the ground's cubes on their four bottom
+// corners. Multi-point contacts whose points are spread over the faces: no two normal rows
+// nearly parallel.
+Problem cubePyramid(int base, double mu) {
+  World w;
+  const Eigen::Vector3d size(1.0, 1.0, 1.0);
+  std::vector<std::vector<int>> rows;
+  for (int r = 0; r < base; ++r) {
+    rows.emplace_back();
+    for (int k = 0; k < base - r; ++k)
+      rows.back().push_back(w.add(hard::box(1.0, size, Eigen::Vector3d(0.5 * r + k, 0.0, 0.5 + r))));
+  }
+  auto corners = [&](int a, int b, double x0, double x1, double z) {
+    for (double x : {x0, x1})
+      for (double y : {-0.5, 0.5}) w.contact(a, b, Eigen::Vector3d(x, y, z), Eigen::Vector3d::UnitZ(), mu);
+  };
+  for (int k = 0; k < base; ++k) corners(rows[0][k], -1, k - 0.5, k + 0.5, 0.0);
+  for (int r = 1; r < base; ++r)
+    for (int k = 0; k < base - r; ++k) {
+      const double x = 0.5 * r + k;  // resting on cubes k and k + 1 of the row below
+      corners(rows[r][k], rows[r - 1][k], x - 0.5, x, r);
+      corners(rows[r][k], rows[r - 1][k + 1], x, x + 0.5, r);
+    }
+  return w.problem();
+}
+
 SolverParams params(SolverKind kind, double tolerance, int max_it) {
   SolverParams p;
   p.solver = kind;
@@ -394,6 +421,22 @@ TEST(Portfolio, AtTwoDigitsTheProbesRateCanPutGaussSeidelBeforeApgd) {
   EXPECT_EQ(afterProbe(r30), "auto:apgd");
   EXPECT_LE(r30.iterations, apgd30.iterations + 50);  // at most the probe's allowance on top
   EXPECT_LE(recomputedResidual(thirty, r30), tol);
+
+  // A pyramid's cubes rest on points spread over their faces, no two normal rows nearly
+  // parallel, W in blocks: apgd needs about as many iterations as nlgs sweeps, each one
+  // product with W, so at two digits it keeps its place whatever the probe's rate says (the
+  // stacks above have four close points per face: nearly parallel rows). 55 cubes: fewer end
+  // within the probe's own sweeps.
+  const Problem pyramid = hard::toBlockSparse(cubePyramid(10, 0.8));
+  const SolveResult nlgs_p = solveProblem(pyramid, params(SolverKind::kNlgs, tol, 100000));
+  const SolveResult apgd_p = solveProblem(pyramid, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_TRUE(nlgs_p.converged && apgd_p.converged);
+  ASSERT_GT(nlgs_p.iterations, 10);  // beyond the probe's first allowance: the rule is asked
+  ASSERT_LE(apgd_p.iterations, 2 * nlgs_p.iterations);
+  const SolveResult rp = solveProblem(pyramid, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(rp.converged) << rp.solver << ": " << rp.message;
+  EXPECT_EQ(afterProbe(rp), "auto:apgd") << "nlgs " << nlgs_p.iterations << ", apgd " << apgd_p.iterations;
+  EXPECT_LE(recomputedResidual(pyramid, rp), tol);
 }
 
 // At a loose tolerance, where the plan puts apgd first (multi-point contacts) and the probe's
