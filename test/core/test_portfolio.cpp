@@ -425,8 +425,8 @@ TEST(Portfolio, AtTwoDigitsTheProbesRateCanPutGaussSeidelBeforeApgd) {
   // A pyramid's cubes rest on points spread over their faces, no two normal rows nearly
   // parallel, W in blocks: apgd needs about as many iterations as nlgs sweeps, each one
   // product with W, so at two digits it keeps its place whatever the probe's rate says (the
-  // stacks above have four close points per face: nearly parallel rows). 55 cubes: fewer end
-  // within the probe's own sweeps.
+  // stacks above have four close points per face: nearly parallel rows). 55 cubes: on fewer
+  // nlgs ends within the probe's own sweeps, before the rule is asked.
   const Problem pyramid = hard::toBlockSparse(cubePyramid(10, 0.8));
   const SolveResult nlgs_p = solveProblem(pyramid, params(SolverKind::kNlgs, tol, 100000));
   const SolveResult apgd_p = solveProblem(pyramid, params(SolverKind::kApgd, tol, 100000));
