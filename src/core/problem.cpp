@@ -137,8 +137,9 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
 // The hot case of every product with a contact problem's W (before it was unrolled, three
 // quarters of apgd's time on a box pyramid): a 3-row block row against 3-column blocks.
 // Accumulating in locals and not in y lets the compiler keep them in registers (y may alias
-// x, as far as it knows), and the fixed trip count unrolls. Each block's dot products are summed in the generic loop's order
-// and then added to the row's total, so the result is the same to the bit.
+// x, as far as it knows), and the fixed trip count unrolls. Each block's dot products are
+// summed in the generic loop's order and then added to the row's total, so the result is the
+// same to the bit.
 void BlockSparseMatrix::multiplyThreeRows(int i, const double* x, double* y) const {
   double y0 = 0.0, y1 = 0.0, y2 = 0.0;
   for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
