@@ -50,10 +50,11 @@ using Clock = std::chrono::steady_clock;
 // the residual from the start), then stage by stage while the rate of the last stage reaches
 // the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
-// (probeAllowance). A few weakly coupled contacts with exact local solves end there, at a
-// fraction of a Newton step's cost. Otherwise a Gauss-Seidel plan goes on from the probe's
-// iterate, newton too if the probe was no longer than its own warm-up, and any other plan
-// starts from the start, as it would have without the probe.
+// (probeAllowance; ten again before a scout on faces resting on faces). A few weakly coupled
+// contacts with exact local solves end there, at a fraction of a Newton step's cost.
+// Otherwise a Gauss-Seidel plan goes on from the probe's iterate, newton too if the probe was
+// no longer than its own warm-up, and any other plan starts from the start, as it would have
+// without the probe.
 // Then each member runs in slices of iterations from the best iterate so far (the Gauss-Seidel
 // blocks formed once, an apgd slice resuming the last one's momentum: kernels.h memos): a slice that
 // ends without lowering the residual by the member's factor (10 for newton/prox, 2 for the
@@ -199,8 +200,17 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // sweep (0.6..1.7 of one on the study's block-sparse problems, the product alone 0.4), and
 // where Gauss-Seidel's rate is good apgd needs 2..6x its iterations: fifty; before newton
 // behind an apgd scout, the smaller of newton's and apgd's (the scout is the member the
-// probe's sweeps would save first). Others (Lemke, prox, a fixed plan): ten.
-int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction) {
+// probe's sweeps would save first). Others (Lemke, prox, a fixed plan): ten. Ten too before
+// a scout that holds (autoPlan: multi-point contacts spread over their faces, most rows
+// contacts): there apgd needs about as many iterations as Gauss-Seidel sweeps, each cheaper,
+// and the probe's sweeps are only insurance against a problem that a few of them solve; those
+// that go on to the tolerance cost more than the scout they replace, and those that stop short
+// are lost, the scout starting from the start (the scenes' brick pyramids B2 and B3 at
+// 1e-4..1e-8: 0.7-0.8x auto's time). Not at three digits, where no scout runs: stacks of boxes
+// with such contacts are solved there by the sweeps that the probe's rate puts first, or by
+// newton, in a seventh to a fifteenth of apgd's iterations (test_portfolio.cpp).
+int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction, bool apgd_holds) {
+  if (scout && apgd_holds) return kAutoProbeSweeps;
   switch (plan.front()) {
     case SolverKind::kNewton: {
       // With friction, where newton's warm-up runs to the tolerance itself (a loose one), at
@@ -699,6 +709,8 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_ho
     // Multi-point or rank-deficient contacts: apgd scouts first (below). Reached under the
     // residual rule only (any other is `loose`), which the scout's rate test needs.
     *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
+    // A scout holds as apgd does above: the probe before it stops at ten sweeps.
+    *apgd_holds = *scout && f.multi_point && !f.rank_deficient && !mostlyBilateral(ctx);
     return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   }
   return gs_first ? Plan{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
@@ -859,7 +871,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   members.clear();
   Plan plan;                     // measured once, when first needed
   bool plan_scout = false;       // autoPlan's: an apgd scout goes before newton (residual rule only)
-  bool plan_apgd_holds = false;  // autoPlan's: at two digits the probe's rate leaves apgd first
+  bool plan_apgd_holds = false;  // autoPlan's: apgd, first or scout, needs about nlgs's iterations
   int known_symmetric = -1;      // W's symmetry once measured (LCPs)
   const PositiveDiagonal positive_diagonal(ctx);
   auto planned = [&]() -> const Plan& {
@@ -1227,7 +1239,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         int allowance = kAutoProbeSweeps;
         if (probe_sweeps + 2.0 * needed > allowance) {
           const Plan& plan_now = planned();  // sets plan_scout: measured before it is read
-          allowance = probeAllowance(plan_now, plan_scout, ctx, friction);
+          allowance = probeAllowance(plan_now, plan_scout, ctx, friction, plan_apgd_holds);
         }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);

@@ -439,6 +439,28 @@ TEST(Portfolio, AtTwoDigitsTheProbesRateCanPutGaussSeidelBeforeApgd) {
   EXPECT_LE(recomputedResidual(pyramid, rp), tol);
 }
 
+// Below three digits, before newton's apgd scout on the same pyramids: the probe stops at its
+// first ten sweeps. There apgd needs no more iterations than nlgs sweeps, so sweeps that go on
+// to the tolerance cost more than the scout, and those that stop short are lost (the scout
+// starts from the start); before the rule the probe swept up to fifty times first. The scout
+// ends the solve, at most ten sweeps after apgd's own iterations. Residuals recomputed from the
+// forces.
+TEST(Portfolio, BeforeAScoutOnFacesRestingOnFacesTheProbeStopsAtTenSweeps) {
+  for (int base : {3, 4}) {
+    const Problem pyramid = hard::toBlockSparse(cubePyramid(base, 0.8));
+    for (double tol : {1e-5, 1e-6}) {
+      const SolveResult nlgs = solveProblem(pyramid, params(SolverKind::kNlgs, tol, 100000));
+      const SolveResult apgd = solveProblem(pyramid, params(SolverKind::kApgd, tol, 100000));
+      ASSERT_TRUE(nlgs.converged && apgd.converged);
+      ASSERT_LE(apgd.iterations, nlgs.iterations) << base << " at " << tol;
+      const SolveResult r = autoSolvesAlong(pyramid, tol, "auto:apgd");
+      EXPECT_EQ(r.solver, "auto:nlgs->apgd");
+      EXPECT_LE(r.iterations, apgd.iterations + 10) << r.solver << " on " << base << " at " << tol << ": nlgs "
+                                                     << nlgs.iterations << ", apgd " << apgd.iterations;
+    }
+  }
+}
+
 // At a loose tolerance, where the plan puts apgd first (multi-point contacts) and the probe's
 // rate says Gauss-Seidel needs more sweeps than newton's warm-up and two factorizations (but
 // at most twice that), newton goes on from the probe's sweeps: six boxes, four points per
