@@ -625,6 +625,13 @@ bool mostlyBilateral(const SolveContext& ctx) {
   return 2 * rows.bilateral > rows.all;
 }
 
+// Multi-point contacts whose points are spread over their faces (no nearly parallel normal
+// rows), most rows contacts: apgd needs about as many iterations as Gauss-Seidel sweeps, each
+// one product with the block-sparse W (autoPlan's `apgd_holds`, read in runPortfolio).
+bool apgdHolds(const AutoFeatures& f, const SolveContext& ctx) {
+  return f.multi_point && !f.rank_deficient && !mostlyBilateral(ctx);
+}
+
 // `friction`: ctx.hasFriction(), measured once per solve by the caller.
 Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_holds,
               int known_symmetric, const PositiveDiagonal& positive_diagonal) {
@@ -683,9 +690,8 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_ho
       return {K::kNewton, K::kNlgs, K::kApgd, K::kProx};
     if ((dominant && f.rows <= kAutoSmallRows) || gs_suits)
       return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
-    // Multi-point contacts whose points are spread over their faces (no nearly parallel normal
-    // rows), most rows contacts: apgd keeps its place at two digits too (runPortfolio).
-    *apgd_holds = f.multi_point && !f.rank_deficient && !mostlyBilateral(ctx);
+    // Where apgd holds (apgdHolds) it keeps its place at two digits too (runPortfolio).
+    *apgd_holds = apgdHolds(f, ctx);
     return {K::kApgd, K::kNlgs, K::kNewton, K::kProx};
   }
   // Tight: Gauss-Seidel only where it contracts fast whatever the size.
@@ -709,8 +715,8 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_ho
     // Multi-point or rank-deficient contacts: apgd scouts first (below). Reached under the
     // residual rule only (any other is `loose`), which the scout's rate test needs.
     *scout = (f.multi_point || f.rank_deficient) && f.rows >= kAutoScoutRows;
-    // A scout holds as apgd does above: the probe before it stops at ten sweeps.
-    *apgd_holds = *scout && f.multi_point && !f.rank_deficient && !mostlyBilateral(ctx);
+    // A scout that holds: the probe before it stops at ten sweeps (probeAllowance).
+    *apgd_holds = *scout && apgdHolds(f, ctx);
     return {K::kNewton, K::kProx, K::kApgd, K::kNlgs};
   }
   return gs_first ? Plan{K::kNlgs, K::kApgd, K::kProx, K::kNewton}
