@@ -201,7 +201,7 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // where Gauss-Seidel's rate is good apgd needs 2..6x its iterations: fifty; before newton
 // behind an apgd scout, the smaller of newton's and apgd's (the scout is the member the
 // probe's sweeps would save first). Others (Lemke, prox, a fixed plan): ten. Ten too before
-// a scout that holds (autoPlan: multi-point contacts spread over their faces, most rows
+// a scout that holds (apgdHolds: multi-point contacts spread over their faces, most rows
 // contacts): there apgd needs about as many iterations as Gauss-Seidel sweeps, each cheaper,
 // and the probe's sweeps are only insurance against a problem that a few of them solve; those
 // that go on to the tolerance cost more than the scout they replace, and those that stop short
@@ -1285,7 +1285,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // pyramid whose three sweeps promised 38 more took 114) and the sweeps cost less than
       // newton (newtonCheaperThanSweeps; the rule below otherwise): apgd's cost is not known,
       // these sweeps' is, and the probe's would be lost (LMGC at 1e-3 with apgd kept first:
-      // 1.6x the time). Not at two digits where the plan says apgd holds (autoPlan: multi-point
+      // 1.6x the time). Not at two digits where the plan says apgd holds (apgdHolds: multi-point
       // contacts spread over their faces, most rows contacts): there an apgd iteration, one
       // product with the block-sparse W, costs less than a sweep and the two need about as many
       // (box pyramids of 15-136 cubes at 1e-2: 22-139 sweeps against 21-82 iterations, apgd

@@ -455,8 +455,9 @@ TEST(Portfolio, BeforeAScoutOnFacesRestingOnFacesTheProbeStopsAtTenSweeps) {
       ASSERT_LE(apgd.iterations, nlgs.iterations) << base << " at " << tol;
       const SolveResult r = autoSolvesAlong(pyramid, tol, "auto:apgd");
       EXPECT_EQ(r.solver, "auto:nlgs->apgd");
-      EXPECT_LE(r.iterations, apgd.iterations + 10) << r.solver << " on " << base << " at " << tol << ": nlgs "
-                                                     << nlgs.iterations << ", apgd " << apgd.iterations;
+      EXPECT_LE(r.iterations, apgd.iterations + 10)
+          << r.solver << " on " << base << " at " << tol << ": nlgs " << nlgs.iterations << ", apgd "
+          << apgd.iterations;
     }
   }
 }
