@@ -122,6 +122,15 @@ constexpr int kAutoProbeLcpFactorSweeps = 20;
 constexpr int kAutoScoutFirst = 20;
 constexpr int kAutoScoutIterations = 100;
 constexpr int kAutoScoutRows = 30;
+// Past kAutoScoutIterations the scout goes on only where what is left is short: its forecast
+// reaches no further than the scout has run (a rate measured over at least as many iterations
+// as it predicts) and the scout in all costs less than newton's modeled cost, its warm-up and
+// kAutoScoutNewtonSteps steps of n/3 sweeps (an apgd iteration costs about a sweep). LMGC's
+// periodic box of grains at 1e-4 (180 rows): 80 iterations 22x above the tolerance forecast 72
+// more; dropped at the cap, newton took 3.7 ms where apgd alone takes 1.4. The cost bound alone,
+// without the horizon, lost 2-3x on BoxesStack1 at 1e-5/1e-6, whose early rate promises what
+// apgd does not keep (20-40 iterations forecasting 140-200).
+constexpr int kAutoScoutNewtonSteps = 8;  // the low end of newton's 8-20 steps on such contacts
 // Gauss-Seidel's over-relaxation ω, chosen online where the user left sor at 1: a plan's
 // Gauss-Seidel member first sweeps kAutoOmegaTrial times plainly, measuring its rate ρ per
 // sweep, then, if at that rate it would need more sweeps than that again, as many at Young's
@@ -158,6 +167,14 @@ double youngOmega(double rho) { return std::min(kAutoOmegaMax, 2.0 / (1.0 + std:
 
 // One Newton step in sweeps: an LU of n rows (2n³/3 flops) against a sweep's 2n².
 double newtonStepSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 3.0; }
+
+// Whether the apgd scout goes on, after `iterations` in all, with `needed` more forecast by
+// its last slice's rate (kAutoScoutIterations, kAutoScoutNewtonSteps).
+bool scoutGoesOn(const SolveContext& ctx, int iterations, double needed) {
+  if (iterations + needed <= kAutoScoutIterations) return true;
+  const double newton = kNewtonWarmupSweeps + kAutoScoutNewtonSteps * newtonStepSweeps(ctx);
+  return needed <= iterations && iterations + needed <= newton;
+}
 
 bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
   const int n = ctx.problem->rowCount();
@@ -1177,18 +1194,18 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (saved_slice > 0 && !failedToRun(r.status)) continue;  // a trial window is no slice: no stall test
     if (cur.scout) {
       // Go on while the rate of its last slice (the first: from the start) reaches the
-      // tolerance within its allowance, as the probe's stages do: apgd's rate slows as it
-      // goes, and a scout that runs out of its allowance is pure loss. A slice is at most as
-      // long as the scout so far, so that a rate which slows within it is seen after at most
-      // twice the iterations it took to predict it. Otherwise newton starts from what it
-      // would have started from.
+      // tolerance within its allowance (scoutGoesOn), as the probe's stages do: apgd's rate
+      // slows as it goes, and a scout that runs out of its allowance is pure loss. A slice is
+      // at most as long as the scout so far, so that a rate which slows within it is seen
+      // after at most twice the iterations it took to predict it. Otherwise newton starts
+      // from what it would have started from.
       const double slice_start = scout.iterations == 0 ? probe_start : scout.last_residual;
       scout.iterations += r.iterations;
       scout.last_residual = residual;
       if (r.iterations > 0 && residual < slice_start && !failedToRun(r.status) &&
           r.status != SolveStatus::kTimeBudget) {
         const double needed = iterationsToReach(params.tolerance, slice_start, residual, r.iterations);
-        if (scout.iterations + needed <= kAutoScoutIterations) {
+        if (scoutGoesOn(ctx, scout.iterations, needed)) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, scout.iterations);
           continue;
         }

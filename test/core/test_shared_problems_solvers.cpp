@@ -69,6 +69,25 @@ TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIter
   EXPECT_LE(solvers_test::recomputedResidual(island, r.forces), tol);
 }
 
+// Past its cap of 100 iterations, an apgd scout goes on where its forecast reaches no
+// further than it has run and the scout in all stays within newton's modeled cost
+// (portfolio.cpp, scoutGoesOn): LMGC's periodic box of grains at 1e-4 (180 rows, multi-point
+// contacts), whose scout at 80 iterations is 22x above the tolerance and forecasts 72 more,
+// and where newton takes 2.7x apgd's time. Dropped at the cap, auto went on with newton:
+// `auto:nlgs->apgd->newton`. Independently: the residual recomputed from the forces.
+TEST(SharedProblemsSolvers, AScoutWhoseForecastIsShorterThanItsRunGoesOnPastItsCap) {
+  const Problem p =
+      readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5").string());
+  const double tol = 1e-4;
+  const SolveResult apgd = solveProblem(p, params(SolverKind::kApgd, tol, 100000));
+  ASSERT_TRUE(apgd.converged) << apgd.message;
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs->apgd");
+  EXPECT_LE(r.iterations, apgd.iterations + 10) << "the scout is apgd from the start, after a short probe";
+  EXPECT_LE(solvers_test::recomputedResidual(p, r.forces), tol);
+}
+
 // Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
 TEST(SharedProblemsSolvers, NewtonReachesTenDigitsOnTheRankDeficientStacks) {
   for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat"}) {
