@@ -941,6 +941,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   bool warmup_over = false;  // the probe swept through newton's warm-up
   SavedBest& warmup_best = work.warmup;
   warmup_best.residual = std::numeric_limits<double>::infinity();
+  int warmup_end_sweeps = 0;  // the probe's sweeps when warmup_best was saved
   std::unique_ptr<Problem> assembled;      // the body form's W, assembled only if a member needs it
   const Eigen::VectorXd& origin = lambda;  // lambda itself is written once, at the end
   // A kernel may leave a force on an ignored contact (minW, maxF) or on the tangent rows of a
@@ -1220,6 +1221,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // fifty sweeps, or at n: twice its need no longer fitted on top of the sweeps it had run.
       // Capsules-i101's 72-row island at 1e-6: 39 sweeps to 2.3e-6 needing about 30 more, then
       // newton took 670 us where nlgs alone takes 220 (`auto:nlgs->apgd->nlgs` now: 370 us).
+      // The need is the smaller of the last stage's and the one since newton's warm-up ended
+      // (probe_end_needed): Capsules-i100's 51-row island at 1e-5 swept 0.986 per sweep in its
+      // last ten (the plain window after an ω window), 0.91 since its warm-up; newton took
+      // 480 us where nlgs needed 30 more sweeps, about 50 us.
       if (std::isfinite(probe_end.residual) && probe_end.residual < best_residual &&
           2.0 * probe_end_needed <= ctx.problem->rowCount() && moveFirst(members, SolverKind::kNlgs))
         restoreBest(probe_end);
@@ -1230,7 +1235,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (warmup_stage) {
         warmup_over = probe_sweeps + r.iterations >= kNewtonWarmupSweeps ||
                       best_residual <= std::max(params.tolerance, kNewtonWarmupTolerance);
-        if (warmup_over && !(best_residual > probe_start) && !failedToRun(r.status)) saveBest(warmup_best);
+        if (warmup_over && !(best_residual > probe_start) && !failedToRun(r.status)) {
+          saveBest(warmup_best);
+          warmup_end_sweeps = probe_sweeps + r.iterations;
+        }
       }
       // Go on while the rate of the last stage reaches the tolerance within the probe's
       // allowance (what the plan's first member would cost, in sweeps).
@@ -1292,7 +1300,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       m = 0;
       if (plan_scout && friction && std::isfinite(needed) && probe_kind == SolverKind::kNlgs) {
         saveBest(probe_end);  // where Gauss-Seidel resumes if the scout fails (below)
+        // Its need at the better of the last stage's rate and the rate since newton's warm-up
+        // ended: a last stage can be a plateau or the plain window after an ω window.
         probe_end_needed = needed;
+        if (std::isfinite(warmup_best.residual) && probe_sweeps > warmup_end_sweeps &&
+            best_residual < warmup_best.residual)
+          probe_end_needed = std::min(needed, iterationsToReach(params.tolerance, warmup_best.residual, best_residual,
+                                                                probe_sweeps - warmup_end_sweeps));
       }
       // Where about two digits are asked and the probe's rate says Gauss-Seidel reaches them
       // within a slice of its own, it goes before a planned apgd: multi-point contacts and rank
