@@ -44,7 +44,7 @@ void expectFinite(const SolveResult& r, const std::string& what) {
   EXPECT_TRUE(std::isfinite(r.residual)) << what;
 }
 
-// The island of a shared fc3d problem with `rows` rows (the first; none: no rows).
+// The first island of a shared fc3d problem with `rows` rows (an empty problem where none has).
 Problem islandWithRows(const std::string& name, int rows) {
   const Problem whole = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / name).string());
   const Islands islands = findIslands(whole);
