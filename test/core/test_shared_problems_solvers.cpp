@@ -56,19 +56,24 @@ Problem islandWithRows(const std::string& name, int rows) {
   return Problem{};
 }
 
+// auto on that island at `tol`: the apgd scout fails and Gauss-Seidel goes on from the
+// probe's iterate (`auto:nlgs->apgd->nlgs`), to the tolerance recomputed from the forces.
+void expectGaussSeidelResumesAfterTheScout(const std::string& name, int rows, double tol) {
+  const Problem island = islandWithRows(name, rows);
+  ASSERT_EQ(island.rowCount(), rows) << "the case needs " << name << "'s " << rows << "-row island";
+  const SolveResult r = solveProblem(island, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs->apgd->nlgs");
+  EXPECT_LE(solvers_test::recomputedResidual(island, r.forces), tol);
+}
+
 // After a failed apgd scout, Gauss-Seidel goes on from the probe's last iterate where the
 // probe's last stage said it needed at most half of newton's lower bound (n sweeps): a
 // 72-row island of Capsules-i101-404 (multi-point capsule contacts) at 1e-6, whose probe
 // stops 2.3x above the tolerance, whose scout fails, and where newton would take 3x the
 // time nlgs takes alone. Independently: the residual recomputed from the forces.
 TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIterate) {
-  const Problem island = islandWithRows("Capsules-i101-404.dat", 72);
-  ASSERT_EQ(island.rowCount(), 72) << "the case needs Capsules-i101-404's 72-row island";
-  const double tol = 1e-6;
-  const SolveResult r = solveProblem(island, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
-  EXPECT_EQ(r.solver, "auto:nlgs->apgd->nlgs");
-  EXPECT_LE(solvers_test::recomputedResidual(island, r.forces), tol);
+  expectGaussSeidelResumesAfterTheScout("Capsules-i101-404.dat", 72, 1e-6);
 }
 
 // The same where the probe's last stage was slow but its rate since newton's warm-up ended
@@ -76,13 +81,7 @@ TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIter
 // island at 2.6e-5 (its share of 1e-5 for the whole problem), whose last ten sweeps fell at
 // 0.986 per sweep after 0.91 before; newton there takes 4x the time nlgs takes alone.
 TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesWhereItsRateSinceTheWarmUpSaysSo) {
-  const Problem island = islandWithRows("Capsules-i100-1090.dat", 51);
-  ASSERT_EQ(island.rowCount(), 51) << "the case needs Capsules-i100-1090's 51-row island";
-  const double tol = 2.6e-5;
-  const SolveResult r = solveProblem(island, params(SolverKind::kAuto, tol, 100000));
-  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
-  EXPECT_EQ(r.solver, "auto:nlgs->apgd->nlgs");
-  EXPECT_LE(solvers_test::recomputedResidual(island, r.forces), tol);
+  expectGaussSeidelResumesAfterTheScout("Capsules-i100-1090.dat", 51, 2.6e-5);
 }
 
 // Past its cap of 100 iterations, an apgd scout goes on where its forecast reaches no
@@ -92,8 +91,8 @@ TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesWhereItsRateSince
 // and where newton takes 2.7x apgd's time. Dropped at the cap, auto went on with newton:
 // `auto:nlgs->apgd->newton`. Independently: the residual recomputed from the forces.
 TEST(SharedProblemsSolvers, AScoutWhoseForecastIsShorterThanItsRunGoesOnPastItsCap) {
-  const Problem p =
-      readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5").string());
+  const fs::path file = fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5";
+  const Problem p = readProblemFile(file.string());
   const double tol = 1e-4;
   const SolveResult apgd = solveProblem(p, params(SolverKind::kApgd, tol, 100000));
   ASSERT_TRUE(apgd.converged) << apgd.message;
