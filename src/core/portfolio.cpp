@@ -168,19 +168,23 @@ double youngOmega(double rho) { return std::min(kAutoOmegaMax, 2.0 / (1.0 + std:
 // One Newton step in sweeps: an LU of n rows (2n³/3 flops) against a sweep's 2n².
 double newtonStepSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 3.0; }
 
+// newton's modeled cost in sweeps: its warm-up and `steps` Newton steps.
+double newtonCostSweeps(const SolveContext& ctx, int steps) {
+  return kNewtonWarmupSweeps + steps * newtonStepSweeps(ctx);
+}
+
 // Whether the apgd scout goes on, after `iterations` in all, with `needed` more forecast by
 // its last slice's rate (kAutoScoutIterations, kAutoScoutNewtonSteps).
 bool scoutGoesOn(const SolveContext& ctx, int iterations, double needed) {
   if (iterations + needed <= kAutoScoutIterations) return true;
-  const double newton = kNewtonWarmupSweeps + kAutoScoutNewtonSteps * newtonStepSweeps(ctx);
-  return needed <= iterations && iterations + needed <= newton;
+  return needed <= iterations && iterations + needed <= newtonCostSweeps(ctx, kAutoScoutNewtonSteps);
 }
 
 bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
   const int n = ctx.problem->rowCount();
   const bool counted = !ctx.problem->bodies &&
                        (std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) || n <= kAutoNewtonRows);
-  return counted && sweeps > kNewtonWarmupSweeps + kAutoNewtonSteps * newtonStepSweeps(ctx);
+  return counted && sweeps > newtonCostSweeps(ctx, kAutoNewtonSteps);
 }
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
