@@ -26,25 +26,8 @@ namespace lcp_contact_solver::core {
 namespace {
 
 using hard::Body;
+using hard::boxStack;
 using hard::World;
-
-// A stack of boxes resting face on face, k points per face, alternate boxes `ratio` times
-// heavier, pushed sideways and spun: 3k rows per face against 6 DoF per box, so W is
-// rank-deficient, and the mass ratio makes it ill-conditioned as well.
-Problem boxStack(int boxes, int k, double ratio, double push, double mu) {
-  World w;
-  const Eigen::Vector3d size(1.0, 1.0, 0.5);
-  for (int i = 0; i < boxes; ++i) {
-    Body b = hard::box(i % 2 ? ratio : 1.0, size, Eigen::Vector3d(0.0, 0.0, 0.25 + 0.5 * i));
-    b.v = Eigen::Vector3d(push * (i % 2 ? 1 : -1), 0.3 * push, 0.0);
-    b.w = Eigen::Vector3d(0.0, 0.0, push);
-    w.add(b);
-  }
-  for (int i = 0; i < boxes; ++i)
-    for (const Eigen::Vector3d& p : hard::bottomPoints(w.bodies[i].com, size, k))
-      w.contact(i, i - 1, p, Eigen::Vector3d::UnitZ(), mu);
-  return w.problem();
-}
 
 // A pyramid of unit cubes, `base` on the ground: each cube above rests on two, on four points
 // at the corners of each overlap (a half face), the ground's cubes on their four bottom
