@@ -806,10 +806,30 @@ struct PortfolioMember {
   bool scout = false;    // apgd before newton, from the start: its iterate dropped unless it ends the solve
   int warmup_credit = 0;  // newton after the probe: the warm-up sweeps the probe ran (its first run only)
   bool trial = false;     // its next slice is a trial (kernels.h: trialPassed)
+  bool capped = false;    // its next slice lasts at most as long as the solve so far (a stall's hand-over)
 };
 
 // A member's log residual decrease per second over all its slices.
 double overallRate(const PortfolioMember& member) { return member.decrease / std::max(member.seconds, 1e-9); }
+
+// After a stall chosen by rate (runPortfolio), whether the member that just stalled, `m`, takes
+// the next slice itself: only where its last slice's rate is at least every other member's
+// record, the larger of that member's last-slice rate and its rate over all its slices.
+// Otherwise the other with the best record goes. A member that lowered the residual a little
+// in each slice, less than its factor, would otherwise be handed ever longer slices while the
+// member that lowered it fastest before sits idle with a last slice that did not (apgd, whose
+// residual rises before it falls when it restarts from another member's iterate): on stacks of
+// 6-9 boxes with a mass ratio of 100 (bench/stacked_boxes.cpp) prox took slice after slice,
+// 0.19-1.2 s in all, where apgd alone converges in 13-66 ms.
+std::size_t stallTakerAfter(const std::vector<PortfolioMember>& members, std::size_t m) {
+  auto record = [](const PortfolioMember& mem) { return std::max(mem.rate, overallRate(mem)); };
+  std::size_t other = members.size();
+  for (std::size_t k = 0; k < members.size(); ++k)
+    if (k != m && record(members[k]) > 0.0 &&
+        (other == members.size() || record(members[k]) > record(members[other])))
+      other = k;
+  return other != members.size() && members[m].rate < record(members[other]) ? other : m;
+}
 
 // The best iterate with its measures, set aside while a member runs that may be undone.
 struct SavedBest {
@@ -1043,6 +1063,15 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     member.deadline = ctx.deadline;
     if (ctx.has_deadline && (members.size() > 1 || cur.probe)) {  // leave the others (the plan) half of what is left
       member.deadline = t0 + (ctx.deadline - t0) / 2;
+    }
+    // A slice handed over on a stall lasts at most as long as the solve so far: a member chosen
+    // by its rate may need far more time per iteration than the solve's others (a proximal step
+    // solves a Newton sub-problem), and the solve's time at most doubles per hand-over.
+    if (cur.capped) {
+      cur.capped = false;
+      const Clock::time_point cap = t0 + (t0 - solve_start);
+      if (!member.has_deadline || cap < member.deadline) member.deadline = cap;
+      member.has_deadline = true;
     }
     member.problem = ctx.problem;
     if (ctx.problem->bodies && cur.kind != SolverKind::kNlgs && cur.kind != SolverKind::kPgs) {
@@ -1425,7 +1454,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // slices, not the next in turn: apgd's residual can sit on a plateau for thousands of
     // iterations before it falls, and a member that never lowered it would be handed ever
     // longer slices in between (30 boxes stacked, mass ratio 100, at 1e-3: nlgs raised the
-    // residual in every slice, newton failed; the rotation gave them 0.43 s of 2.4).
+    // residual in every slice, newton failed; the rotation gave them 0.43 s of 2.4). The
+    // member that just stalled takes the next slice itself only where no other member's record
+    // beats its last slice (stallTakerAfter), and that slice, whoever takes it, lasts at most
+    // as long as the solve so far (capped).
     // A member not tried yet runs its first slice on trial (kernels.h: trialPassed): once it
     // has taken as long as the solve so far without lowering the residual it started from, it
     // stops there. Iterations are no measure of that: a Newton step costs a factorization
@@ -1443,7 +1475,9 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         if (!(members[next].rate > 0.0))
           for (std::size_t k = 0; k < members.size(); ++k)
             if (overallRate(members[k]) > overallRate(members[next])) next = k;
+        if (next == m) next = stallTakerAfter(members, m);
         members[next].slice = std::min(2 * members[next].slice, 1 << 28);
+        members[next].capped = true;
       }
       m = next;
     }
