@@ -1067,10 +1067,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // A slice handed over on a stall lasts at most as long as the solve so far: a member chosen
     // by its rate may need far more time per iteration than the solve's others (a proximal step
     // solves a Newton sub-problem), and the solve's time at most doubles per hand-over.
+    const Clock::time_point as_long_again = t0 + (t0 - solve_start);  // the solve so far, once more
     if (cur.capped) {
       cur.capped = false;
-      const Clock::time_point cap = t0 + (t0 - solve_start);
-      if (!member.has_deadline || cap < member.deadline) member.deadline = cap;
+      if (!member.has_deadline || as_long_again < member.deadline) member.deadline = as_long_again;
       member.has_deadline = true;
     }
     member.problem = ctx.problem;
@@ -1103,7 +1103,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // A trial (trialPassed) lasts as long as the solve so far; a Gauss-Seidel member's is its
     // slice after the ω window.
     member.has_trial_deadline = cur.trial && saved_slice == 0;
-    member.trial_deadline = t0 + (t0 - solve_start);
+    member.trial_deadline = as_long_again;
     if (saved_slice == 0) cur.trial = false;
     // The probe's own windows at Young's ω and plainly after it (probe_omega_window), and its
     // later stages at the ω kept.
