@@ -9,17 +9,18 @@
 //                 [--out bench/results/stacked_boxes.csv] [--repeats 5] [--budget 2]
 #include "../test/core/hard_case_util.h"
 
+#include "cli_options.h"
+#include "timing_util.h"
+
 #include "lcp_contact_solver/core/contact_solver.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -33,13 +34,6 @@ core::Problem boxStack(int boxes, int k, double ratio) {
   return core::hard::boxStack(boxes, k, ratio, kPush, kMu);
 }
 
-std::vector<std::string> split(const std::string& list) {
-  std::vector<std::string> out;
-  std::stringstream ss(list);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-  return out;
-}
-
 struct Cell {
   bool converged = false;
   int iterations = 0;
@@ -47,21 +41,16 @@ struct Cell {
   std::string path;
 };
 
-// The fastest of up to `repeats` solves, fewer once they have taken a second in all.
-Cell timeSolve(const core::Problem& p, const std::string& solver, double tolerance, int repeats, double budget) {
-  core::SolverParams params;
-  params.tolerance = tolerance;
-  params.maxIt = 100000;
-  params.time_budget = budget;
-  core::parseSolverName(solver, &params.solver);
+// The fastest of up to `repeats` solves (wall clock), fewer once they have taken a second in all.
+Cell timeSolve(const core::Problem& p, const core::SolverParams& params, int repeats) {
   Cell cell;
   cell.seconds = 1e300;
   double spent = 0.0;
   for (int r = 0; r < repeats && spent < 1.0; ++r) {
     core::ContactSolver s(params);
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = lcs_bench::Clock::now();
     const core::SolveResult result = s.solve(p);
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double dt = lcs_bench::secondsSince(t0);
     spent += dt;
     cell.seconds = std::min(cell.seconds, dt);
     cell.converged = result.converged;
@@ -80,18 +69,25 @@ int main(int argc, char** argv) {
   int repeats = 5;
   double budget = 2.0;
   app.add_option("--tolerances", tolerances, "comma list")->capture_default_str();
-  app.add_option("--solvers", solvers, "comma list; auto first for the regret summary")->capture_default_str();
+  app.add_option("--solvers", solvers, "comma list of `solver` values; auto's regret needs auto among them")
+      ->capture_default_str();
   app.add_option("--out", out, "the CSV to write")->capture_default_str();
   app.add_option("--repeats", repeats, "solves per cell at most (fewer past a second)")->capture_default_str();
   app.add_option("--budget", budget, "time_budget of every solve (s)")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = lcs_bench::parseArguments(app, argc, argv); status >= 0) return status;
+  std::string error;
+  std::vector<lcs_bench::RepeatedSolver> runs = lcs_bench::repeatedSolvers(solvers, 0.0, &error);
+  if (!error.empty()) {
+    std::fprintf(stderr, "stacked_boxes: %s\n", error.c_str());
+    return 2;
+  }
 
   std::ofstream csv(out);
   csv << "problem,boxes,points,ratio,rows,solver,tolerance,converged,iterations,time_min_s,path\n";
   // Per tolerance: log regrets of auto over the fastest own solver that converged.
   std::map<double, std::vector<double>> regrets;
   std::map<double, std::vector<std::string>> above;
-  for (const std::string& tol_text : split(tolerances)) {
+  for (const std::string& tol_text : lcs_bench::splitList(tolerances)) {
     const double tol = std::stod(tol_text);
     for (int boxes = 2; boxes <= 10; ++boxes)
       for (int points : {4, 8})
@@ -100,8 +96,11 @@ int main(int argc, char** argv) {
           char name[64];
           std::snprintf(name, sizeof name, "stack_%d_%d_%g", boxes, points, ratio);
           double auto_time = -1.0, best = 1e300;
-          for (const std::string& solver : split(solvers)) {
-            const Cell c = timeSolve(p, solver, tol, repeats, budget);
+          for (lcs_bench::RepeatedSolver& run : runs) {
+            run.params.tolerance = tol;
+            run.params.time_budget = budget;
+            const std::string& solver = run.name;
+            const Cell c = timeSolve(p, run.params, repeats);
             csv << name << ',' << boxes << ',' << points << ',' << ratio << ',' << p.rowCount() << ',' << solver
                 << ',' << tol << ',' << (c.converged ? 1 : 0) << ',' << c.iterations << ',' << c.seconds << ','
                 << c.path << '\n';
@@ -117,7 +116,6 @@ int main(int argc, char** argv) {
               above[tol].push_back(cell);
             }
           }
-          std::fflush(stdout);
         }
   }
   for (const auto& [tol, logs] : regrets) {
