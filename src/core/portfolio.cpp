@@ -808,7 +808,7 @@ struct PortfolioMember {
   bool trial = false;     // its next slice is a trial (kernels.h: trialPassed)
   bool capped = false;    // its next slice lasts at most as long as the solve so far (a stall's hand-over)
   double trial_cut = 0.0;  // its first trial, stopped at the trial's deadline, lasted this long (s)
-  bool second_trial = false;  // that trial's second is due or done (lastResort)
+  bool second_trial = false;  // that trial's second is due or done (dueSecondTrials)
 };
 
 // A member's log residual decrease per second over all its slices.
@@ -845,14 +845,13 @@ std::size_t stallTakerAfter(const std::vector<PortfolioMember>& members, std::si
 // run in twenty (test_portfolio_scene.cpp). While a second trial is pending a slice takes at
 // most half the iterations left, so that a stall comes before maxIt (the time budget's slices
 // already take at most half the time left).
+bool awaitsSecondTrial(const PortfolioMember& mem) { return mem.trial_cut > 0.0 && !mem.second_trial; }
 bool secondTrialPending(const std::vector<PortfolioMember>& members) {
-  for (const PortfolioMember& mem : members)
-    if (mem.trial_cut > 0.0 && !mem.second_trial) return true;
-  return false;
+  return std::any_of(members.begin(), members.end(), awaitsSecondTrial);
 }
 void dueSecondTrials(std::vector<PortfolioMember>& members) {
   for (PortfolioMember& mem : members)
-    if (mem.trial_cut > 0.0 && !mem.second_trial) {
+    if (awaitsSecondTrial(mem)) {
       mem.second_trial = true;
       mem.tried = false;
     }
