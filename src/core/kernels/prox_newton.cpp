@@ -14,8 +14,14 @@
 // (more sticking rows than the bodies have degrees of freedom) meets a singular J and
 // stalls. Small σ makes the outer loop fast (λ_{k+1} is close to the solution), large σ
 // makes the inner problem well conditioned; σ is adapted: divided by 10 after a sub-problem
-// Newton solves and that lowers the true residual, multiplied by 10 when Newton fails or
-// the residual does not fall. σ starts at 1e-2 times the mean diagonal of W (W's scale).
+// Newton solves and that does not raise the true residual (kFlat), multiplied by 10 when
+// Newton fails or the residual rises, and the next step then starts again from the last
+// centre. σ starts at 1e-2 times the mean diagonal of W (W's scale).
+// A solved step that leaves the residual where it was is a proximal step all the same: on a
+// rank-deficient W it moves λ along W's null space, by about the residual / σ, until a contact
+// changes state and the residual falls. Its λ is the next centre and σ falls, so that those
+// moves lengthen. The loop gives up where the best residual has not halved within
+// kStallSteps steps.
 //
 // Inexact sub-problems: each runs newton (newton.cpp, its own nlgs warm start and bursts,
 // and its damping without the raise after a cut step: σ I regularizes the sub-problem already)
@@ -46,6 +52,17 @@ constexpr double kSigmaMin = 1e-12;      // times the mean diagonal
 constexpr double kSigmaMax = 1e4;        // times the mean diagonal
 constexpr double kInnerReduction = 0.1;  // inner tolerance: this times the outer residual
 constexpr int kMaxOuterSteps = 200;
+// A solved sub-problem whose true residual is at most this much (relative) above the last one
+// left it flat (above). Taken for a failure, such steps restarted from the same centre with
+// ever more damping: the 81-row sphere_pile step 356 at 1e-9, from apgd's iterate, ended in
+// "no progress even with the largest proximal weight" after 18 iterations at 2.3e-8; taken
+// as steps, 5 of them reach 3e-14.
+constexpr double kFlat = 1e-3;
+// Steps within which the best residual must halve: as many as σ has decades between its
+// start and its floor (kSigmaStart / kSigmaMin), so flat steps have lengthened their moves
+// through every scale by then. Without it, steps that lower the residual by 0.1 % each ran to
+// kMaxOuterSteps (a box pyramid at 1e-10: 42 000 iterations where the loop used to stop at 970).
+constexpr int kStallSteps = 10;
 // Iterations (sweeps + Newton steps) one sub-problem may take: a sub-problem Newton cannot
 // solve (σ so small that it is as singular as the problem) ends here and gets a larger σ,
 // instead of spending the whole remaining budget (maxIt, time_budget) on one step.
@@ -100,6 +117,9 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
   const double scale = meanDiagonal(problem, ctx.regularization);
   double sigma = kSigmaStart * scale;
   int iterations = 0, outer = 0, failures = 0;
+  Eigen::VectorXd centre = lambda;  // the last step's λ that was kept: the next step's prox centre
+  int stall_start = 0;              // the step from which the best residual must halve
+  double stall_best = best_residual;
   for (;;) {
     if (iterations >= params.maxIt) {
       report.message = "prox: maxIt (" + std::to_string(params.maxIt) + ") iterations over " +
@@ -110,6 +130,16 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       report.message = "prox: " + std::to_string(outer) + " proximal steps without reaching the tolerance";
       break;
     }
+    if (outer - stall_start >= kStallSteps) {
+      if (!(best_residual <= 0.5 * stall_best)) {
+        report.status = SolveStatus::kNumericalFailure;
+        report.message = "prox: the residual did not halve in " + std::to_string(kStallSteps) +
+                         " proximal steps (" + std::to_string(outer) + " in all); best iterate returned";
+        break;
+      }
+      stall_start = outer;
+      stall_best = best_residual;
+    }
     if (outer > 0 && (ctx.deadlinePassed() || ctx.trialPassed(best_residual))) {
       report.status = SolveStatus::kTimeBudget;
       report.message = "prox: time budget (" + std::to_string(params.time_budget) + " s) ran out after " +
@@ -117,7 +147,6 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       break;
     }
     ++outer;
-    const Eigen::VectorXd centre = lambda;
     sub.d_free = problem.d_free - sigma * centre;
     inner.regularization = ctx.regularization + sigma;
     inner_params.tolerance = std::max(0.5 * params.tolerance, kInnerReduction * residual);
@@ -143,13 +172,13 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       break;
     }
     const bool solved = step.status == SolveStatus::kConverged;
-    if (solved && next < residual) {
+    if (solved && next <= residual * (1.0 + kFlat)) {
       sigma = std::max(sigma * 0.1, kSigmaMin * scale);
     } else {
-      // Newton could not solve the sub-problem, or solving it did not help: more damping,
-      // restarting from the best iterate when the step made things worse.
+      // Newton could not solve the sub-problem, or solving it raised the residual: more
+      // damping, restarting from the last centre when the step made things worse.
       if (!solved) ++failures;
-      if (next > residual) lambda = best;
+      if (next > residual) lambda = centre;
       if (sigma >= kSigmaMax * scale) {
         report.status = SolveStatus::kNumericalFailure;
         report.message = "prox: no progress even with the largest proximal weight after " +
@@ -159,6 +188,7 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       sigma *= 10.0;
     }
     residual = std::min(residual, next);
+    centre = lambda;
   }
   if (report.status != SolveStatus::kConverged) lambda = best;
   report.iterations = iterations;
