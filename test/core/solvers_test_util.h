@@ -1,5 +1,5 @@
 // Problems and checks shared by the core tests (test_solvers*.cpp, test_portfolio.cpp, test_islands.cpp,
-// test_shared_problems_solvers.cpp).
+// test_shared_problems_solvers.cpp) and scene/test_portfolio_scene.cpp.
 #pragma once
 
 #include "lcp_contact_solver/core/contact_solver.h"

@@ -4,15 +4,14 @@
 // integrated it without contact forces. Every step must now be solved. (On a loaded machine
 // step 356 at 1e-9 once ended at maxIt, newton's trial stopped by the clock two steps short of
 // converging: such a member now gets a second trial before the limits run out, portfolio.cpp.)
+#include "../core/solvers_test_util.h"
 #include "lcp_contact_solver/core/contact_solver.h"
-#include "lcp_contact_solver/core/residual.h"
 #include "lcp_contact_solver/core/stabilization.h"
 #include "lcp_contact_solver/scene/scene_simulator.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
-#include <vector>
 
 using namespace lcp_contact_solver;
 using namespace lcp_contact_solver::scene;
@@ -74,17 +73,13 @@ TEST(PortfolioScene, ProxGoesOnFromApgdIteratesOnTheSpherePile) {
       const core::Problem& problem = sim.lastProblem().problem;
       core::Problem solved = problem;  // with the scene's erp, as the solver states it
       ASSERT_EQ(core::applyStabilization(prox, &solved), "");
-      const std::vector<double> mu = core::effectiveMu(solved, apgd.mu);
       for (int iterations : {20, 50, 100, 200, 400, 800}) {
         apgd.maxIt = iterations;
         core::ContactSolver solver(apgd);
         solver.solve(problem);
         ASSERT_EQ(solver.setParams(prox), "");
         const core::SolveResult r = solver.solve(problem);
-        Eigen::VectorXd d;
-        core::multiply(solved.W, r.forces, d);
-        d += solved.d_free;
-        const double residual = core::naturalMapResidual(solved, mu, r.forces, d);
+        const double residual = core::solvers_test::recomputedResidual(solved, r.forces, apgd.mu);
         ++solves;
         if ((r.status != core::SolveStatus::kConverged || !(residual <= tolerance)) && failures++ == 0)
           first_failure = "step " + std::to_string(k) + " after " + std::to_string(iterations) +
