@@ -250,13 +250,32 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   }
   // Independent islands of W are solved apart (islands.h), built once for every maxF pass.
   std::unique_ptr<IslandSolver> islands;
+  KernelReport whole_sweeps;  // auto's sweeps on the whole problem before its islands (autoWholeSweepsEnd)
+  double whole_seconds = 0.0;
   // Newton on the disc stays whole: its globalisation (nlgs warm-up and bursts, ε from the
   // residual) reaches 1e-8 on Capsules-i101-404 whole but not on one of its 32 islands alone.
   const bool split = kind != SolverKind::kNewton || !ctx.hasFriction();
   if (params_.islands && split && !params_.displayDebug && p.problem->contacts.size() > 1 &&
       p.problem->rowCount() >= kMinRowsForIslands) {
     Islands found = findIslands(*p.problem);
-    if (found.count() > 1) islands = std::make_unique<IslandSolver>(ctx, std::move(found));
+    if (found.count() > 1 && kind == SolverKind::kAuto) {  // first a few sweeps on the whole problem
+      if (autoWholeSweepsEnd(ctx, ctx.start_residual, lambda, whole_sweeps, whole_seconds)) {
+        zeroInactiveRows(ctx, lambda);
+        result.stages.emplace_back(solverName(SolverKind::kNlgs), whole_seconds);
+        result.solver = autoPath(result.stages);
+        return whole_sweeps;
+      }
+    }
+    if (found.count() > 1 && whole_sweeps.iterations > 0) {  // maxIt bounds sweeps and islands together
+      SolverParams rest = params_;
+      rest.maxIt -= whole_sweeps.iterations;
+      const SolverParams* own = ctx.params;
+      ctx.params = &rest;  // the islands copy their parameters
+      islands = std::make_unique<IslandSolver>(ctx, std::move(found));
+      ctx.params = own;
+    } else if (found.count() > 1) {
+      islands = std::make_unique<IslandSolver>(ctx, std::move(found));
+    }
   }
   const int threads = params_.threads > 0 ? params_.threads : defaultThreadCount();
   const auto kernel = [kind](const SolveContext& c, Eigen::VectorXd& l) { return runKernel(kind, c, l); };
@@ -290,6 +309,14 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
     ++result.resolves;
   }
   zeroInactiveRows(ctx, lambda);
+  if (whole_sweeps.iterations > 0) {  // they swept every island once each: counted as such
+    report.iterations += whole_sweeps.iterations;
+    report.total_iterations += whole_sweeps.iterations * islands->count();
+    if (!result.stages.empty() && result.stages.front().first == solverName(SolverKind::kNlgs))
+      result.stages.front().second += whole_seconds;
+    else
+      result.stages.insert(result.stages.begin(), {solverName(SolverKind::kNlgs), whole_seconds});
+  }
   if (kind == SolverKind::kAuto) result.solver = autoPath(result.stages);
   return report;
 }

@@ -264,6 +264,73 @@ TEST(Islands, AutoAcceptsAZeroStartThatMeetsTheToleranceAsAWhole) {
   }
 }
 
+// Each island alone is held to its share of the tolerance, stricter than the whole problem's
+// test, so from a start within a digit of the tolerance auto first sweeps the whole problem a
+// few times (autoWholeSweepsEnd). Where those sweeps meet the tolerance they are the answer:
+// nlgs's own three sweeps on the whole problem, not one run per island. Where they do not (the
+// start two digits above it, or W coupled too strongly for three sweeps) the islands are
+// solved as before and the sweeps are counted. Checked by the residual recomputed from W.
+TEST(Islands, AutoEndsWithWholeSweepsWhereTheyMeetTheToleranceFirst) {
+  for (unsigned seed : {21u, 22u, 23u}) {
+    Generated g = generate(8, 5, Kinds::kFrictional, seed, 0.05);
+    ASSERT_GE(g.problem.rowCount(), kMinRowsForIslands);
+    const int count = findIslands(g.problem).count();
+    ASSERT_GT(count, 3);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(g.problem.rowCount());
+    const double start = recomputedResidual(g.problem, zero);
+    const SolveResult three = solveProblem(g.problem, paramsFor(SolverKind::kNlgs, 1e-300, 3, false));
+    // a tolerance within a digit of the start that three whole sweeps meet
+    const double tol = std::max(three.residual * 1.01, start / 9.0);
+    ASSERT_LT(tol, start);
+    const SolveResult whole = solveProblem(g.problem, paramsFor(SolverKind::kNlgs, tol, 3, false));
+    ASSERT_TRUE(whole.converged) << "seed " << seed;
+    const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, 100000, true));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_EQ(r.solver, "auto:nlgs");
+    EXPECT_EQ(r.iterations, whole.iterations);
+    EXPECT_EQ(r.total_iterations, whole.iterations) << "one run on the whole problem, not one per island";
+    EXPECT_EQ(r.forces, whole.forces);
+    EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
+    solvers_test::expectPath(r);
+    // Two digits below the start: no whole sweeps, every island solved on its own.
+    const double tight = 1e-2 * start;
+    const SolveResult split = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tight, 100000, true));
+    ASSERT_TRUE(split.converged) << split.message;
+    EXPECT_GE(split.total_iterations, count);
+    EXPECT_LE(recomputedResidual(g.problem, split.forces), tight);
+  }
+}
+
+// Where three whole sweeps fall short of a tolerance within a digit of the start, their iterate
+// is dropped and the islands are solved as before, each from the start: the same forces as the
+// same solve without the sweeps (a maxF that binds no contact leaves them out), three more
+// iterations, and three more sweeps per island in the work. maxIt bounds both together.
+TEST(Islands, WholeSweepsThatFallShortAreCountedAndTheIslandsGoOn) {
+  const Generated g = generate(4, 12, Kinds::kFrictional, 31, 1e-2, 12);  // coupled groups: slower sweeps
+  const int count = findIslands(g.problem).count();
+  ASSERT_GT(count, 1);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(g.problem.rowCount());
+  const double tol = recomputedResidual(g.problem, zero) / 9.0;
+  const SolveResult three = solveProblem(g.problem, paramsFor(SolverKind::kNlgs, 1e-300, 3, false));
+  ASSERT_GT(three.residual, tol) << "three sweeps would end it";
+  const SolveResult r = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, 100000, true));
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_LE(recomputedResidual(g.problem, r.forces), tol);
+  solvers_test::expectPath(r);
+  EXPECT_EQ(r.solver.rfind("auto:nlgs", 0), 0u) << r.solver;  // the sweeps are its first stage
+  SolverParams without = paramsFor(SolverKind::kAuto, tol, 100000, true);
+  without.maxF = 1e300;
+  const SolveResult islands_alone = solveProblem(g.problem, without);
+  ASSERT_TRUE(islands_alone.converged);
+  EXPECT_EQ(r.forces, islands_alone.forces);
+  EXPECT_EQ(r.iterations, islands_alone.iterations + 3);
+  EXPECT_EQ(r.total_iterations, islands_alone.total_iterations + 3 * count);
+  for (int max_it : {7, 9, 12}) {
+    const SolveResult bounded = solveProblem(g.problem, paramsFor(SolverKind::kAuto, tol, max_it, true));
+    EXPECT_LE(bounded.iterations, max_it) << "maxIt bounds the sweeps and the islands together";
+  }
+}
+
 // auto on islands reports one island's path (the one that took longest): "auto:" and its
 // stages' names, each stage's time within the solve's own.
 TEST(Islands, AutoReportsThePathOfOneIslandWithItsTimes) {
