@@ -258,23 +258,23 @@ KernelReport ContactSolver::solvePrepared(Prepared& p, Eigen::VectorXd& lambda, 
   if (params_.islands && split && !params_.displayDebug && p.problem->contacts.size() > 1 &&
       p.problem->rowCount() >= kMinRowsForIslands) {
     Islands found = findIslands(*p.problem);
-    if (found.count() > 1 && kind == SolverKind::kAuto) {  // first a few sweeps on the whole problem
-      if (autoWholeSweepsEnd(ctx, ctx.start_residual, lambda, whole_sweeps, whole_seconds)) {
+    if (found.count() > 1) {
+      // auto first sweeps the whole problem a few times (autoWholeSweepsEnd).
+      if (kind == SolverKind::kAuto && autoWholeSweepsEnd(ctx, lambda, whole_sweeps, whole_seconds)) {
         zeroInactiveRows(ctx, lambda);
         result.stages.emplace_back(solverName(SolverKind::kNlgs), whole_seconds);
         result.solver = autoPath(result.stages);
         return whole_sweeps;
       }
-    }
-    if (found.count() > 1 && whole_sweeps.iterations > 0) {  // maxIt bounds sweeps and islands together
-      SolverParams rest = params_;
-      rest.maxIt -= whole_sweeps.iterations;
+      SolverParams rest;  // maxIt bounds the sweeps and the islands together
       const SolverParams* own = ctx.params;
-      ctx.params = &rest;  // the islands copy their parameters
+      if (whole_sweeps.iterations > 0) {
+        rest = params_;
+        rest.maxIt -= whole_sweeps.iterations;
+        ctx.params = &rest;  // the islands copy their parameters
+      }
       islands = std::make_unique<IslandSolver>(ctx, std::move(found));
       ctx.params = own;
-    } else if (found.count() > 1) {
-      islands = std::make_unique<IslandSolver>(ctx, std::move(found));
     }
   }
   const int threads = params_.threads > 0 ? params_.threads : defaultThreadCount();

@@ -806,13 +806,12 @@ double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda)
 // 32-39 islands took 66-78 in all (5-6 on the slowest). Where they do not, their iterate is
 // dropped and each island's plan starts from the start as before (kept, it changed the islands'
 // paths: MuJoCo's humanoids at 1e-3, 1.1-1.7x); the sweeps count in the solve's iterations.
-bool autoWholeSweepsEnd(const SolveContext& ctx, double start_residual, Eigen::VectorXd& lambda,
-                        KernelReport& report, double& seconds) {
+bool autoWholeSweepsEnd(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport& report, double& seconds) {
   const SolverParams& params = *ctx.params;
   report = KernelReport();
   seconds = 0.0;
   if (params.stopping_rule != StoppingRule::kResidual || params.tolerance < kAutoTightTolerance ||
-      !(start_residual <= kAutoWholeSweepsReach * params.tolerance) || !ctx.hasFriction() ||
+      !(ctx.start_residual <= kAutoWholeSweepsReach * params.tolerance) || !ctx.hasFriction() ||
       pyramidModel(params) || hasExtendedFriction(*ctx.problem) || params.maxIt <= 2 * kAutoProbeFirst ||
       params.maxF > 0.0 || !lambda.isZero(0.0))
     return false;

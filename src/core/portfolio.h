@@ -20,12 +20,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda);
 // λ = 0 without a product with W, d = d_free).
 double autoStartResidual(const SolveContext& ctx, const Eigen::VectorXd& lambda);
 
-// Before W's islands are solved apart (islands.h), from λ = 0 at two or three digits: a few
-// plain nlgs sweeps on the whole problem, which end the solve where they meet the whole
-// tolerance (true: `lambda`, `report` and the sweeps' `seconds` are the answer). Otherwise
-// `lambda` is left at zero and `report` holds the sweeps spent (iterations, seconds).
-bool autoWholeSweepsEnd(const SolveContext& ctx, double start_residual, Eigen::VectorXd& lambda,
-                        KernelReport& report, double& seconds);
+// Before W's islands are solved apart (islands.h), from λ = 0 (its residual measured in
+// ctx.start_residual) at two or three digits: a few plain nlgs sweeps on the whole problem,
+// which end the solve where they meet the whole tolerance (true: `lambda`, `report` and the
+// sweeps' `seconds` are the answer). Otherwise `lambda` is left at zero and `report` holds the
+// sweeps spent (iterations; none where they were not worth trying).
+bool autoWholeSweepsEnd(const SolveContext& ctx, Eigen::VectorXd& lambda, KernelReport& report, double& seconds);
 
 // stats.solver of an auto solve: "auto:" and the members in the order they ran.
 std::string autoPath(const std::vector<std::pair<std::string, double>>& stages);
