@@ -584,10 +584,19 @@ double denseSymmetricCoupling(const SolveContext& ctx, const Eigen::MatrixXd& W,
   return active > 0 ? sum / active : 0.0;
 }
 
-// A frictional plan that starts with Gauss-Seidel whatever the tolerance (autoPlan, below):
-// block-sparse or dense above kAutoNewtonRows rows, a moderate coupling, no rank deficiency.
-bool firstOrderBySize(const AutoFeatures& f) {
-  return (f.sparse || f.rows > kAutoNewtonRows) && f.coupling < kAutoSparseGs && !f.rank_deficient;
+// A frictional plan that starts with Gauss-Seidel (autoPlan, below): block-sparse or dense
+// above kAutoNewtonRows rows and a moderate coupling, at any tolerance where W has full rank,
+// and down to kAutoNewtonTolerance (residual rule) where it does not. Nearly parallel normal
+// rows between the same two bodies (a capsule lying on another along a line: two points) leave
+// the split of the force between them open, and Gauss-Seidel picks one without losing its
+// rate while the coupling stays moderate; the scout and newton that such rows otherwise get
+// are for the strongly coupled face contacts of box stacks (κ 2.3-3.6). The capsule piles'
+// rank-deficient islands (12-177 rows, κ 0.5-1.9) at 1e-5/1e-6: Gauss-Seidel (sor 1.3) is the
+// fastest own solver, and the scout-then-newton plan took 1.5-2.3x its time. Below
+// kAutoNewtonTolerance newton's superlinear steps pay there as elsewhere.
+bool firstOrderBySize(const AutoFeatures& f, const SolverParams& p) {
+  if (!(f.sparse || f.rows > kAutoNewtonRows) || !(f.coupling < kAutoSparseGs)) return false;
+  return !f.rank_deficient || (p.stopping_rule == StoppingRule::kResidual && p.tolerance >= kAutoNewtonTolerance);
 }
 
 // A dense LCP's W is compared for symmetry (a non-symmetric one usually at its first pair); a
@@ -636,7 +645,7 @@ AutoFeatures autoFeatures(const SolveContext& ctx, int body_dof, bool friction, 
     f.multi_point = c.multi_point >= kAutoRedundantShare;
   }
   if (body_dof > 0) f.rank_deficient = f.rank_deficient || activeRows(ctx).all > body_dof;
-  if (!f.body_form && friction && !one_pass && !firstOrderBySize(f))
+  if (!f.body_form && friction && !one_pass && !firstOrderBySize(f, *ctx.params))
     f.multi_point = normalCoupling(ctx, friction, true, true).multi_point >= kAutoRedundantShare;
   return f;
 }
@@ -689,10 +698,11 @@ Plan autoPlan(const SolveContext& ctx, bool friction, bool* scout, bool* apgd_ho
   }
   const bool dominant = f.coupling < kAutoDominant && !f.rank_deficient;
   // Block-sparse W (one block per pair of contacts sharing a body) with a moderate coupling:
-  // Gauss-Seidel first at any tolerance and size; so too a dense W above kAutoNewtonRows,
-  // where the plan is first-order either way and a sweep, like an apgd iteration, is one pass
-  // over W whatever its storage (a MuJoCo W stored dense because it is full).
-  if (firstOrderBySize(f)) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
+  // Gauss-Seidel first at any size (and tolerance, unless W is rank-deficient:
+  // firstOrderBySize); so too a dense W above kAutoNewtonRows, where the plan is first-order
+  // either way and a sweep, like an apgd iteration, is one pass over W whatever its storage
+  // (a MuJoCo W stored dense because it is full).
+  if (firstOrderBySize(f, p)) return {K::kNlgs, K::kApgd, K::kNewton, K::kProx};
   // Between the first-order methods: Gauss-Seidel's early sweeps are its fast ones, so it goes
   // first down to kAutoModerateTolerance unless W is rank-deficient or has multi-point contacts,
   // where its rate collapses and apgd's momentum wins (box pyramids at 1e-4: apgd 5-11x faster;
