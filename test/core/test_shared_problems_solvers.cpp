@@ -70,8 +70,8 @@ void expectGaussSeidelResumesAfterTheScout(const std::string& name, int rows, do
 // After a failed apgd scout, Gauss-Seidel goes on from the probe's last iterate where the
 // probe's last stage said it needed at most half of newton's lower bound (n sweeps): the
 // 72-row island of Capsules-i101-404 (multi-point, rank-deficient capsule contacts) at 9e-7,
-// just below where its plan starts with Gauss-Seidel (next test), whose probe stops 2.8x above
-// the tolerance and whose scout fails. Independently: the residual recomputed from the forces.
+// just below where its plan starts with Gauss-Seidel (next test), whose probe stops above the
+// tolerance and whose scout fails. Independently: the residual recomputed from the forces.
 TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIterate) {
   expectGaussSeidelResumesAfterTheScout("Capsules-i101-404.dat", 72, 9e-7);
 }
@@ -82,7 +82,7 @@ TEST(SharedProblemsSolvers, AfterAFailedScoutGaussSeidelResumesFromTheProbesIter
 // that the strongly coupled face contacts of box stacks get; below 1e-6 the scout plan as
 // before. Each solve converges (residual recomputed from the forces), and Gauss-Seidel first
 // costs no more sweeps than plain nlgs alone (the probe's sweeps and the over-relaxation
-// trial included), where the scout plan had run 40-120 apgd iterations before it.
+// trial included), where the scout plan ran apgd from the start before it.
 TEST(SharedProblemsSolvers, RankDeficientContactsOfModerateCouplingStartWithGaussSeidelDownToOneMicro) {
   struct Case {
     const char* file;
