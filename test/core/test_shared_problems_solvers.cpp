@@ -220,6 +220,31 @@ TEST(SharedProblemsSolvers, NewtonEndsALimitCycleAtItsFirstRepeat) {
   EXPECT_LE(recomputedResidual(island, a.forces), 1e-6);
 }
 
+// A Gauss-Seidel drift to a separation is jumped (portfolio.cpp, kAutoDriftReach): on the
+// same 48-row island plain nlgs sits near 5.6e-6 for hundreds of sweeps while load moves
+// between the capsule contacts, until a normal force reaches zero. auto, whose Gauss-Seidel
+// member stalls there, jumps along the slice's drift to that separation and converges in a
+// fraction of nlgs's sweeps (before the jump: 1 305 iterations through apgd, newton and prox,
+// against nlgs's 919). Independently: the residual recomputed from the forces.
+TEST(SharedProblemsSolvers, AGaussSeidelDriftToASeparationIsJumped) {
+  const Problem whole = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "Capsules-i101-404.dat").string());
+  const Islands islands = findIslands(whole);
+  ASSERT_GT(islands.count(), 12);
+  const Problem island = islandProblem(whole, whole.rowOffsets(), islands.contacts[12]);
+  ASSERT_EQ(island.rowCount(), 48);
+  const double tol = 1.2e-6;
+  // The premise: plain sweeps are still on the plateau after 400.
+  const SolveResult plateau = solveProblem(island, params(SolverKind::kNlgs, tol, 400));
+  EXPECT_GT(recomputedResidual(island, plateau.forces), 4.0 * tol);
+  const SolveResult nlgs = solveProblem(island, params(SolverKind::kNlgs, tol, 100000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const SolveResult r = solveProblem(island, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_TRUE(startsWith(r.solver, "auto:nlgs")) << r.solver;
+  EXPECT_LE(4 * r.iterations, nlgs.iterations) << r.solver;
+  EXPECT_LE(recomputedResidual(island, r.forces), tol);
+}
+
 // Cut short, apgd says so and keeps its best iterate.
 TEST(SharedProblemsSolvers, ApgdCutShortIsHonest) {
   const Problem p =
