@@ -281,6 +281,8 @@ TEST_F(ProblemIoFiles, BadSizes) {
   // FC3D: nc = 2 but a 3x3 matrix.
   expectFault(write("fc3d_rows.dat", "3 2 0 3 3 3 3 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"), "6x6 expected");
   expectFault(write("fc3d_dim.dat", "2 1 0 3 3 3 3 1 0 0 0 1 0 0 0 1 -1 0 0 0.5"), "2x2 expected");
+  // Siconos' 2-D friction files (one contact: 2x2 W, 2 q, 1 mu) are named as such.
+  expectFault(write("fc2d.dat", "2 1 0 2 2 2 2 1 0 0 1 -1 0 0.5"), "2-D frictional contact problem");
   expectFault(write("no_contacts.dat", "3 0 0 0 0 0 0"), "no contacts");
   // A tiny sparse file cannot make us allocate a huge dense LCP matrix.
   expectFault(write("huge_sparse_lcp.dat", "900000 1 900000 900000 1 1 1 900000 900000"),

@@ -309,8 +309,24 @@ bool looksLikeFc3d(const std::string& path, const std::string& content) {
   }
 }
 
+// A 2-D frictional contact file (Siconos' FC2D, `2 nc storage 2nc ...`) read as an LCP would be
+// refused for its "matrix storage" nc: it is named instead. An LCP of size 2 has 2, not 0/1, third.
+bool looksLikeFc2d(const std::string& path, const std::string& content) {
+  TokenReader peek(path, content.substr(0, 4096));
+  try {
+    if (peek.readInt("") != 2) return false;
+    const long long nc = peek.readInt("");
+    const long long storage = peek.readInt("");
+    return nc > 0 && (storage == 0 || storage == 1) && peek.readInt("") == 2 * nc;
+  } catch (const ProblemFileError&) {
+    return false;
+  }
+}
+
 // The .dat parser proper, on the file's content; `path` names it in messages.
 Problem parseSiconosDat(const std::string& path, std::string content) {
+  if (looksLikeFc2d(path, content))
+    fail(path, "a 2-D frictional contact problem (space dimension 2): only 3-D contact problems and LCPs are read");
   const bool fc3d = looksLikeFc3d(path, content);
   TokenReader in(path, std::move(content));
   Problem problem = fc3d ? readFc3d(in) : readLcp(in);
