@@ -227,10 +227,7 @@ TEST(SharedProblemsSolvers, NewtonEndsALimitCycleAtItsFirstRepeat) {
 // fraction of nlgs's sweeps (before the jump: 1 305 iterations through apgd, newton and prox,
 // against nlgs's 919). Independently: the residual recomputed from the forces.
 TEST(SharedProblemsSolvers, AGaussSeidelDriftToASeparationIsJumped) {
-  const Problem whole = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "Capsules-i101-404.dat").string());
-  const Islands islands = findIslands(whole);
-  ASSERT_GT(islands.count(), 12);
-  const Problem island = islandProblem(whole, whole.rowOffsets(), islands.contacts[12]);
+  const Problem island = islandWithRows("Capsules-i101-404.dat", 48);  // island 12, its only 48-row one
   ASSERT_EQ(island.rowCount(), 48);
   const double tol = 1.2e-6;
   // The premise: plain sweeps are still on the plateau after 400.
