@@ -1,6 +1,7 @@
 // Siconos .dat files (the numerics test data: LCPs and FC3D problems), read into a Problem.
 #include "problem_files.h"
 
+#include <array>
 #include <Eigen/Core>
 
 #include <algorithm>
@@ -295,39 +296,41 @@ Problem readFc3d(TokenReader& in) {
   return problem;
 }
 
+// The first numbers of a file (at most four; fewer where it ends or a token is not a number),
+// read once to tell its kind: the full read reports any fault.
+struct HeaderPeek {
+  std::array<long long, 4> values{};
+  int count = 0;
+};
+HeaderPeek peekHeader(const std::string& path, const std::string& content) {
+  TokenReader peek(path, content.substr(0, 4096));  // the header is at the start
+  HeaderPeek header;
+  try {
+    for (; header.count < 4; ++header.count) header.values[header.count] = peek.readInt("");
+  } catch (const ProblemFileError&) {
+  }
+  return header;
+}
+
+bool isStorage(long long value) { return value == 0 || value == 1; }
+
 // An FC3D file starts `3 nc storage rows`, with storage 0/1; an LCP file starts
 // `n storage rows cols` with rows == n, so its third number is never 0 or 1 when n == 3.
-bool looksLikeFc3d(const std::string& path, const std::string& content) {
-  TokenReader peek(path, content.substr(0, 4096));  // the header is at the start
-  try {
-    if (peek.readInt("") != 3) return false;
-    peek.readInt("");
-    const long long storage = peek.readInt("");
-    return storage == 0 || storage == 1;
-  } catch (const ProblemFileError&) {
-    return false;  // the full read reports the fault
-  }
-}
+bool looksLikeFc3d(const HeaderPeek& h) { return h.count >= 3 && h.values[0] == 3 && isStorage(h.values[2]); }
 
 // A 2-D frictional contact file (Siconos' FC2D, `2 nc storage 2nc ...`) read as an LCP would be
 // refused for its "matrix storage" nc: it is named instead. An LCP of size 2 has 2, not 0/1, third.
-bool looksLikeFc2d(const std::string& path, const std::string& content) {
-  TokenReader peek(path, content.substr(0, 4096));
-  try {
-    if (peek.readInt("") != 2) return false;
-    const long long nc = peek.readInt("");
-    const long long storage = peek.readInt("");
-    return nc > 0 && (storage == 0 || storage == 1) && peek.readInt("") == 2 * nc;
-  } catch (const ProblemFileError&) {
-    return false;
-  }
+bool looksLikeFc2d(const HeaderPeek& h) {
+  return h.count == 4 && h.values[0] == 2 && h.values[1] > 0 && isStorage(h.values[2]) &&
+         h.values[3] == 2 * h.values[1];
 }
 
 // The .dat parser proper, on the file's content; `path` names it in messages.
 Problem parseSiconosDat(const std::string& path, std::string content) {
-  if (looksLikeFc2d(path, content))
+  const HeaderPeek header = peekHeader(path, content);
+  if (looksLikeFc2d(header))
     fail(path, "a 2-D frictional contact problem (space dimension 2): only 3-D contact problems and LCPs are read");
-  const bool fc3d = looksLikeFc3d(path, content);
+  const bool fc3d = looksLikeFc3d(header);
   TokenReader in(path, std::move(content));
   Problem problem = fc3d ? readFc3d(in) : readLcp(in);
   problem.name = baseName(path);
