@@ -22,43 +22,36 @@ namespace {
 
 constexpr int kParallelMinRows = 200;
 
-// Union-find over contacts, with path halving.
-struct DisjointSets {
-  std::vector<int> parent;
-  explicit DisjointSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
+// Quick-find over contacts: every contact holds its island's label (one of its contacts, the
+// head of a list of its members), and a merge relabels the smaller island, so the test
+// whether two contacts are in one island is one load per side. With a union-find's lookup per
+// pair, 260 one-row contacts of a dense W in 7 islands (a MuJoCo box stack, condim 6,
+// pyramidal) took 140-290 us, as long as the Cholesky steps of the solve after it.
+struct IslandLabels {
+  std::vector<int> label, next, tail, size;
+  explicit IslandLabels(int n) : label(n), next(n, -1), tail(n), size(n, 1) {
+    std::iota(label.begin(), label.end(), 0);
+    std::iota(tail.begin(), tail.end(), 0);
   }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
-// Dense W: which contacts it couples, column by column as W is stored. Quick-find: every
-// contact holds its island's label (the head of the island's list), and a merge relabels the
-// smaller island, so the test per pair is one load and W's values are read only across
-// islands (on a W that couples everything, a MuJoCo cloth's 265 rows, an entry-by-entry pass
-// cost 60 % of the Gauss-Seidel solve after it). A union-find with a find per pair took
-// 4-8 ns a pair: 260 one-row contacts in 7 islands (a MuJoCo box stack, condim 6, pyramidal)
-// 140-290 us, as long as the Cholesky steps of the solve after it. W need not be symmetric: every column
-// meets every contact, so both blocks of a pair are read.
-void denseCoupling(const Eigen::MatrixXd& W, const std::vector<int>& offsets, DisjointSets& sets) {
-  const int nc = static_cast<int>(offsets.size()) - 1;
-  const Eigen::Index n = W.rows();
-  std::vector<int> label(nc), next(nc, -1), tail(nc), size(nc, 1);
-  std::iota(label.begin(), label.end(), 0);
-  std::iota(tail.begin(), tail.end(), 0);
-  auto merge = [&](int a, int b) {  // two labels: the larger island's survives
+  // Two labels: the larger island's survives and is returned.
+  int merge(int a, int b) {
     if (size[a] < size[b]) std::swap(a, b);
     for (int x = b; x >= 0; x = next[x]) label[x] = a;
     next[tail[a]] = b;
     tail[a] = tail[b];
     size[a] += size[b];
     return a;
-  };
+  }
+};
+
+// Dense W, column by column as it is stored, W's values read only across islands (on a W that
+// couples everything, a MuJoCo cloth's 265 rows, an entry-by-entry pass cost 60 % of the
+// Gauss-Seidel solve after it). W need not be symmetric: every column meets every contact, so
+// both blocks of a pair are read.
+void denseCoupling(const Eigen::MatrixXd& W, const std::vector<int>& offsets, IslandLabels& labels) {
+  const int nc = static_cast<int>(offsets.size()) - 1;
+  const Eigen::Index n = W.rows();
+  const std::vector<int>& label = labels.label;
   const bool one_row_each = offsets.back() == nc;  // MuJoCo's pyramid edges, LCPs: no row loop
   for (int j = 0; j < nc; ++j) {
     int label_j = label[j];
@@ -71,11 +64,10 @@ void denseCoupling(const Eigen::MatrixXd& W, const std::vector<int>& offsets, Di
           coupled = col[i] != 0.0;
         else
           for (int r = offsets[i]; r < offsets[i + 1]; ++r) coupled |= col[r] != 0.0;
-        if (coupled) label_j = merge(label[i], label_j);
+        if (coupled) label_j = labels.merge(label[i], label_j);
       }
     }
   }
-  sets.parent = std::move(label);  // a head labels itself: trees of depth one
 }
 
 // A process-wide pool: the caller works too, `threads - 1` helpers join it. Calls from
@@ -196,7 +188,8 @@ int defaultThreadCount() {
 
 Islands findIslands(const Problem& problem) {
   const int nc = static_cast<int>(problem.contacts.size());
-  DisjointSets sets(nc);
+  IslandLabels labels(nc);
+  const std::vector<int>& label = labels.label;
   if (problem.bodies) {  // the body form: contacts sharing a (moving) body are coupled
     const BodyCompliance& B = *problem.bodies;
     std::vector<int> first_contact(B.body_compliance.size(), -1);
@@ -205,41 +198,37 @@ Islands findIslands(const Problem& problem) {
         if (b < 0) continue;
         if (first_contact[b] < 0)
           first_contact[b] = i;
-        else
-          sets.unite(first_contact[b], i);
+        else if (label[first_contact[b]] != label[i])
+          labels.merge(label[first_contact[b]], label[i]);
       }
   } else if (const auto* dense = std::get_if<Eigen::MatrixXd>(&problem.W)) {
-    denseCoupling(*dense, problem.rowOffsets(), sets);
+    denseCoupling(*dense, problem.rowOffsets(), labels);
   } else if (const auto* sparse = std::get_if<BlockSparseMatrix>(&problem.W)) {
-    for (int i = 0; i < sparse->blockCount(); ++i) {
-      int root_i = sets.find(i);  // kept current across the row: one find per block
-      for (int b = sparse->row_start[i]; b < sparse->row_start[i + 1]; ++b) {
-        const int j = sparse->block_col[b];
-        if (j == i) continue;
-        const int root_j = sets.find(j);
-        if (root_j == root_i) continue;  // values read only across islands
-        const int size = (sparse->block_offset[i + 1] - sparse->block_offset[i]) *
-                         (sparse->block_offset[j + 1] - sparse->block_offset[j]);
-        const double* v = sparse->values.data() + sparse->value_start[b];
+    const BlockSparseMatrix& W = *sparse;
+    for (int i = 0; i < W.blockCount(); ++i) {
+      int label_i = label[i];
+      const int rows_i = W.block_offset[i + 1] - W.block_offset[i];
+      for (int b = W.row_start[i]; b < W.row_start[i + 1]; ++b) {
+        const int j = W.block_col[b];
+        if (label[j] == label_i) continue;  // values read only across islands (and j == i)
+        const int size = rows_i * (W.block_offset[j + 1] - W.block_offset[j]);
+        const double* v = W.values.data() + W.value_start[b];
         // A stored block of zeros couples nothing.
-        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) {
-          sets.parent[std::max(root_i, root_j)] = std::min(root_i, root_j);
-          root_i = std::min(root_i, root_j);
-        }
+        if (std::any_of(v, v + size, [](double x) { return x != 0.0; })) label_i = labels.merge(label[j], label_i);
       }
     }
   }
   Islands out;
   out.island_of.assign(nc, -1);
-  std::vector<int> island_of_root(nc, -1);
+  std::vector<int> island_of_label(nc, -1);
   for (int i = 0; i < nc; ++i) {
-    const int root = sets.find(i);
-    if (island_of_root[root] < 0) {
-      island_of_root[root] = out.count();
+    const int l = label[i];
+    if (island_of_label[l] < 0) {
+      island_of_label[l] = out.count();
       out.contacts.emplace_back();
     }
-    out.island_of[i] = island_of_root[root];
-    out.contacts[island_of_root[root]].push_back(i);
+    out.island_of[i] = island_of_label[l];
+    out.contacts[island_of_label[l]].push_back(i);
   }
   return out;
 }
