@@ -115,6 +115,33 @@ TEST(Problem, BlockSparseMultiplyMatchesDenseForMixedBlockSizes) {
   EXPECT_LE((y - W * x).cwiseAbs().maxCoeff(), 1e-14 * n);
 }
 
+// Every block 1 x 1 (an LCP's or MuJoCo's pyramid edges' storage): multiply's compressed-row
+// path against the dense product, with absent blocks, an empty row and a stored zero.
+TEST(Problem, BlockSparseMultiplyOfScalarBlocksMatchesDense) {
+  const int n = 9;
+  BlockSparseMatrix B = BlockSparseMatrix::withBlockSizes(std::vector<int>(n, 1));
+  std::srand(11);
+  const Eigen::MatrixXd full = Eigen::MatrixXd::Random(n, n);
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) {
+    B.beginRow();
+    if (i == 4) continue;  // a row with no stored block
+    for (int j = 0; j < n; ++j) {
+      if ((3 * i + j) % 4 == 1) continue;
+      const double v = i == 2 && j == 2 ? 0.0 : full(i, j);
+      B.addBlock(j, Eigen::MatrixXd::Constant(1, 1, v));
+      W(i, j) = v;
+    }
+  }
+  ASSERT_EQ(B.validate(), "");
+  ASSERT_EQ(B.toDense(), W);
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(n);
+  Eigen::VectorXd y;
+  B.multiply(x, y);
+  EXPECT_LE((y - W * x).cwiseAbs().maxCoeff(), 1e-14 * n);
+  EXPECT_EQ(y[4], 0.0);
+}
+
 TEST(Problem, SolverNamesRoundTrip) {
   for (const std::string& name : solverNames()) {
     SolverKind kind;
