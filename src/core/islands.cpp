@@ -368,6 +368,7 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
       isl.params.tolerance = params.tolerance * scale * std::sqrt(w2) / own_scale;
     }
     isl.weight = (norms[k] > 0.0 ? norms[k] : 1.0) / scale;
+    isl.tolerance = isl.params.tolerance;
     SolveContext& c = isl.ctx;
     c.problem = &isl.problem;
     c.params = &isl.params;
@@ -379,6 +380,32 @@ IslandSolver::IslandSolver(const SolveContext& ctx, Islands islands) {
     for (int i : isl.contacts) c.mu.push_back(ctx.mu[i]);
     c.ignored.assign(isl.contacts.size(), false);
   }
+  if (params.stopping_rule == StoppingRule::kResidual && count() > 1) {
+    std::size_t largest = 0, total = 0;
+    for (std::size_t k = 0; k < islands_.size(); ++k) {
+      total += islands_[k].rows.size();
+      if (islands_[k].rows.size() > islands_[largest].rows.size()) largest = k;
+    }
+    if (2 * islands_[largest].rows.size() > total) dominant_ = static_cast<int>(largest);
+  }
+}
+
+// The whole problem meets tol when Σ (e_i w_i)² <= tol² (e_i each island's relative residual,
+// w_i its weight). Once the other islands are solved their sum is known, and usually below
+// their shares (a Gauss-Seidel sweep overshoots its target, a one-contact island is solved
+// exactly): the dominant island may use what is left, never less than its own share.
+double IslandSolver::dominantTolerance(const SolverParams& params) const {
+  const Island& dom = islands_[dominant_];
+  double used = 0.0;
+  for (int k = 0; k < count(); ++k) {
+    if (k == dominant_) continue;
+    const double e = islands_[k].report.solver_error * islands_[k].weight;
+    if (!std::isfinite(e)) return dom.tolerance;
+    used += e * e;
+  }
+  const double left = params.tolerance * params.tolerance - used;
+  if (!(left > 0.0)) return dom.tolerance;
+  return std::max(dom.tolerance, std::sqrt(left) / dom.weight);
 }
 
 KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kernel, Eigen::VectorXd& lambda,
@@ -388,21 +415,37 @@ KernelReport IslandSolver::run(const SolveContext& ctx, const IslandKernel& kern
     isl.lambda = lambda(isl.rows);
   }
   std::vector<std::exception_ptr> errors(islands_.size());
+  // The dominant island (more rows than all others together) runs last, with the tolerance
+  // the others left unused (dominantTolerance); the others in order, or on the workers.
+  const int last = dominant_;
   const std::function<void(int)> task = [&](int k) {
+    if (last >= 0 && k >= last) ++k;  // the dominant island is not among the first tasks
     try {
       islands_[k].report = kernel(islands_[k].ctx, islands_[k].lambda);
     } catch (...) {
       errors[k] = std::current_exception();
     }
   };
+  const int first_tasks = last >= 0 ? count() - 1 : count();
   // Below kParallelMinRows rows, waking a worker costs more than the islands' solves.
-  if (threads <= 1 || count() == 1 || static_cast<int>(ctx.offsets.back()) < kParallelMinRows) {
-    for (int k = 0; k < count(); ++k) task(k);
+  if (threads <= 1 || first_tasks <= 1 || static_cast<int>(ctx.offsets.back()) < kParallelMinRows) {
+    for (int k = 0; k < first_tasks; ++k) task(k);
   } else {
-    ThreadPool::instance().run(count(), threads, task);
+    ThreadPool::instance().run(first_tasks, threads, task);
   }
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
+  if (last >= 0) {
+    Island& isl = islands_[last];
+    isl.params.tolerance = dominantTolerance(*ctx.params);
+    try {
+      isl.report = kernel(isl.ctx, isl.lambda);
+    } catch (...) {
+      isl.params.tolerance = isl.tolerance;
+      throw;
+    }
+    isl.params.tolerance = isl.tolerance;
+  }
 
   // The island whose report speaks for the solve: the worst status, then the most
   // iterations. Its report is copied whole (message and any per-kernel detail).

@@ -363,6 +363,56 @@ TEST(Islands, ResultsDoNotDependOnTheThreadCount) {
   }
 }
 
+// One island with more rows than all the others together is solved last, with the part of
+// the tolerance the others left unused. Here 60 coupled frictional contacts and 30 one-row
+// contacts alone (W_ii = 1, d_free_i = -0.5: solved exactly by one sweep, residual 0), so the
+// big island may use the whole problem's error budget: its sweeps are those of the big
+// island alone at tol |d_free| / |d_free_big|, fewer than at its own share of the tolerance
+// (√(½ s² + ½ / k) / s of it, s = |d_free_big| / |d_free|, k islands), which is what it was
+// held to before. The same forces with the pool's threads; the whole residual, recomputed from
+// W, meets the tolerance.
+TEST(Islands, TheDominantIslandTakesTheToleranceTheOthersLeft) {
+  const Generated big = generate(1, 60, Kinds::kFrictional, 41, 0.05);
+  const int nb = big.problem.rowCount();
+  const int singles = 30;
+  Problem p = big.problem;
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nb + singles, nb + singles);
+  W.topLeftCorner(nb, nb) = std::get<Eigen::MatrixXd>(big.problem.W);
+  p.d_free.conservativeResize(nb + singles);
+  for (int k = 0; k < singles; ++k) {
+    Contact c;
+    c.id = 1000 + k;
+    c.type = ContactType::kFrictionless;
+    c.rows = 1;
+    p.contacts.push_back(c);
+    W(nb + k, nb + k) = 1.0;
+    p.d_free[nb + k] = -0.5;
+  }
+  p.W = W;
+  ASSERT_GT(p.rowCount(), 200) << "the pool runs with threads > 1";
+  ASSERT_EQ(findIslands(p).count(), 1 + singles);
+  const double s = big.problem.d_free.stableNorm() / p.d_free.stableNorm();
+  const double own_share = std::sqrt(0.5 * s * s + 0.5 / (1 + singles)) / s;
+  for (double tol : {1e-3, 1e-6}) {
+    const SolveResult budget = solveProblem(big.problem, paramsFor(SolverKind::kNlgs, tol / s, 100000, false));
+    const SolveResult share = solveProblem(big.problem, paramsFor(SolverKind::kNlgs, tol * own_share, 100000, false));
+    ASSERT_TRUE(budget.converged && share.converged);
+    ASSERT_LT(budget.iterations, share.iterations) << "the test needs a share that costs sweeps";
+    const SolveResult r = solveProblem(p, paramsFor(SolverKind::kNlgs, tol, 100000, true, 1));
+    ASSERT_TRUE(r.converged) << r.message;
+    EXPECT_EQ(r.iterations, budget.iterations) << tol;
+    EXPECT_EQ(r.forces.head(nb), budget.forces) << tol;
+    EXPECT_LE(recomputedResidual(p, r.forces), tol);
+    for (int threads : {2, 0}) {
+      const SolveResult many = solveProblem(p, paramsFor(SolverKind::kNlgs, tol, 100000, true, threads));
+      EXPECT_EQ(many.forces, r.forces) << "threads " << threads;
+    }
+    const SolveResult a = solveProblem(p, paramsFor(SolverKind::kAuto, tol, 100000, true));
+    ASSERT_TRUE(a.converged) << a.message;
+    EXPECT_LE(recomputedResidual(p, a.forces), tol) << a.solver;
+  }
+}
+
 // Warm start and maxF with islands: a second solve from the first one's forces converges at
 // once; maxF drops contacts and re-solves per island as on the whole problem.
 TEST(Islands, WarmStartAndMaxFWork) {

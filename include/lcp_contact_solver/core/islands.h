@@ -52,7 +52,9 @@ class IslandSolver {
   // max_iterations), the largest iteration count, and with the residual stopping rule the
   // whole problem's error from the islands' (each normalised by its own d_free). Each
   // island's residual tolerance is set so that all islands meeting theirs implies the
-  // whole problem meets params.tolerance.
+  // whole problem meets params.tolerance; an island with more rows than all the others
+  // together runs after them, with whatever of the tolerance they left (never less than
+  // its own share), so that the result still does not depend on `threads`.
   KernelReport run(const SolveContext& ctx, const IslandKernel& kernel, Eigen::VectorXd& lambda, int threads);
 
  private:
@@ -62,11 +64,14 @@ class IslandSolver {
     Problem problem;
     SolverParams params;
     double weight = 1.0;  // |d_free_i| / |d_free| (each 1 when zero): residual scale
+    double tolerance = 0.0;  // its own share of the tolerance (params.tolerance between runs)
     SolveContext ctx;
     Eigen::VectorXd lambda;
     KernelReport report;
   };
+  double dominantTolerance(const SolverParams& params) const;
   std::vector<Island> islands_;
+  int dominant_ = -1;  // the island with more rows than all others together, if any
 };
 
 // Worker threads for `threads` = 0 (SolverParams::threads): the core count.
