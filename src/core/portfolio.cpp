@@ -1345,7 +1345,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // A Gauss-Seidel member's iterate that sticks everywhere: the sticking path (stickingPays).
     if (gauss_seidel && friction && by_residual && !sticking_tried && r.iterations > 0 && !failedToRun(r.status) &&
         best_residual < start_residual &&
-        stickingPays(ctx, best, iterationsToReach(params.tolerance, start_residual, best_residual, r.iterations), &stick_recheck) &&
+        stickingPays(ctx, best, iterationsToReach(params.tolerance, start_residual, best_residual, r.iterations),
+                     &stick_recheck) &&
         stickingPathSolves())
       break;
     if (saved_slice > 0 && !failedToRun(r.status)) continue;  // a trial window is no slice: no stall test

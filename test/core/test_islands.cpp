@@ -549,6 +549,35 @@ TEST(SymmetricNewton, SolvesLcpsAndTheResidualOfItsForcesIsTheTolerance) {
   }
 }
 
+// Dense LCPs of 60-250 rows whose active set moves by a few rows per step: from the second
+// step on the Cholesky factor is updated (rows dropped by rank-1 updates, new rows appended)
+// instead of computed again. The answer is checked as above: complementarity and the residual
+// recomputed from W, and Lemke's pivoting (exact, another method) to 1e-8.
+TEST(SymmetricNewton, UpdatedFactorsGiveTheSameSolutionAsLemke) {
+  int steps_checked = 0;
+  for (int n : {60, 150, 250}) {
+    for (unsigned seed : {91u, 92u}) {
+      Generated g = generate(1, n, Kinds::kFrictionless, seed, 1e-2, 3 * n);
+      const Problem& p = g.problem;
+      const SolveResult r = solveProblem(p, paramsFor(SolverKind::kNewton, 1e-12, 1000, false));
+      ASSERT_TRUE(r.converged) << r.message;
+      EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
+      if (r.iterations >= 2) ++steps_checked;
+      EXPECT_LE(recomputedResidual(p, r.forces), 1e-12);
+      Eigen::VectorXd d;
+      multiply(p.W, r.forces, d);
+      d += p.d_free;
+      const double scale = p.d_free.norm();
+      EXPECT_GE(r.forces.minCoeff(), 0.0);
+      EXPECT_GE(d.minCoeff(), -1e-12 * scale);
+      const SolveResult lemke = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-13, 100000, false));
+      ASSERT_TRUE(lemke.converged) << lemke.message;
+      EXPECT_LE(maxDiff(r.forces, lemke.forces), 1e-8) << n << " " << seed;
+    }
+  }
+  EXPECT_GE(steps_checked, 4) << "most of these need more than one Newton step";
+}
+
 TEST(SymmetricNewton, BilateralAndZeroFrictionRows) {
   Generated g = generate(2, 6, Kinds::kMixed, 21, 1e-2);
   for (Contact& c : g.problem.contacts) {

@@ -34,7 +34,17 @@
 // several times faster than its unblocked LDLᵀ at a few hundred rows). A W_AA that is only
 // semidefinite (redundant rows, no diagonal shift) gets a pivoted LDLᵀ whose zero pivots
 // are dropped: one of the many solutions when W_AA λ_A = -q_A is consistent, which the
-// residual then confirms. Larger sparse
+// residual then confirms. From the second step on, the set usually differs from the last one
+// in a few rows (MuJoCo's cloth at 1e-3: 238 active rows, then 58, 20 and 5 dropped, 2-4
+// added), and the factor follows from the last one where that costs well under a new one.
+// Let the last factor be L (W_AA = L Lᵀ, rows in its own order), K the rows kept, D those
+// dropped, E those added. Restricted to the kept rows, W_KK = L_K L_Kᵀ = T Tᵀ + Σ_{d∈D} x_d x_dᵀ,
+// where T is L's lower-triangular K×K block and x_d the dropped column d on the kept rows (zero
+// above d). So T absorbs each x_d by a rank-1 Cholesky update (stable: an update, never a
+// downdate), costing (rows after d)² each. The new rows are then appended: T_EK = W_EK T⁻ᵀ by a
+// triangular solve, and T_EE = chol(W_EE − T_EK T_EKᵀ). A Schur complement that is not
+// positive definite means the new W_AA is not either: the full factorization decides then.
+// Larger sparse
 // W: Eigen's SimplicialLDLT on a matrix with W's full pattern in which the
 // rows and columns of I are replaced by the identity, so the pattern (and the AMD ordering
 // and elimination tree, analysed once per solve) is the same at every iteration.
@@ -115,9 +125,10 @@ class ReducedSystem {
 // (and the solves of a stream) reuse its capacity, so a small island's Newton allocates no
 // matrix.
 struct DenseScratch {
-  std::vector<double> W, M, b;
+  std::vector<double> W, M, T, b;
   Eigen::VectorXd y;  // the semidefinite solve's permuted right-hand side
-  std::vector<int> index;
+  std::vector<int> index, kept, dropped, added;  // the factor's rows; an update's positions and rows
+  std::vector<char> mark;
   std::unique_ptr<Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>> ldlt;  // the semidefinite case
   Eigen::MatrixXd A;
 };
@@ -133,6 +144,7 @@ class DenseReduced : public ReducedSystem {
     constexpr std::size_t kKeep = static_cast<std::size_t>(kKeptDenseRows) * kKeptDenseRows;
     if (s_.W.capacity() > kKeep) std::vector<double>().swap(s_.W);
     if (s_.M.capacity() > kKeep) std::vector<double>().swap(s_.M);
+    if (s_.T.capacity() > kKeep) std::vector<double>().swap(s_.T);
     if (s_.A.size() > static_cast<Eigen::Index>(kKeep)) {
       s_.A.resize(0, 0);
       s_.ldlt.reset();
@@ -140,6 +152,8 @@ class DenseReduced : public ReducedSystem {
   }
   Eigen::Map<Eigen::MatrixXd> W() { return {s_.W.data(), n_, n_}; }
   bool factorize(const std::vector<char>& active, bool semidefinite) override {
+    if (factored_ && !semidefinite_ && updateFactor(active)) return true;
+    factored_ = false;
     s_.index.clear();
     for (int i = 0; i < n_; ++i)
       if (active[i]) s_.index.push_back(i);
@@ -152,7 +166,7 @@ class DenseReduced : public ReducedSystem {
     // In place (Eigen's blocked LLᵀ; fails unless W_AA > 0): L overwrites M's lower half.
     semidefinite_ = false;
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(M);
-    if (llt.info() == Eigen::Success) return true;
+    if (llt.info() == Eigen::Success) return factored_ = true;
     return semidefinite && factorizeSemidefinite();
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
@@ -211,8 +225,90 @@ class DenseReduced : public ReducedSystem {
   }
   static constexpr double kZeroPivot = 1e-12;  // relative to the largest pivot
 
+  // The next step's set differs from the last one's in a few rows: its factor follows from
+  // the last one (derivation above the class) where that costs well under a new
+  // factorization; false (nothing changed) otherwise, or where a new pivot is not positive.
+  bool updateFactor(const std::vector<char>& active) {
+    s_.kept.clear();
+    s_.dropped.clear();
+    s_.added.clear();
+    s_.mark.assign(n_, 0);
+    for (int k = 0; k < m_; ++k) {
+      (active[s_.index[k]] ? s_.kept : s_.dropped).push_back(k);
+      s_.mark[s_.index[k]] = 1;
+    }
+    for (int i = 0; i < n_; ++i)
+      if (active[i] && !s_.mark[i]) s_.added.push_back(i);
+    const int q = static_cast<int>(s_.kept.size());
+    const int e = static_cast<int>(s_.added.size());
+    if (s_.dropped.empty() && e == 0) return true;  // the same set: the same factor
+    // Flops: each dropped column a rank-1 update of the kept rows after it, each new row a
+    // triangular solve, then their own block; the rank-1 updates run several times slower
+    // per flop than the blocked factorization (kUpdateFlopCost).
+    const double kq = q, ke = e;
+    double update = kq * kq + ke * kq * kq + ke * ke * kq + ke * ke * ke / 3.0;
+    for (std::size_t d = 0, r = 0; d < s_.dropped.size(); ++d) {
+      while (r < s_.kept.size() && s_.kept[r] < s_.dropped[d]) ++r;
+      const double after = static_cast<double>(q - static_cast<int>(r));
+      update += 2.0 * after * after;
+    }
+    const double full = std::pow(static_cast<double>(q + e), 3) / 3.0;
+    if (kUpdateFlopCost * update >= full) return false;
+    const int m = q + e;
+    s_.T.assign(static_cast<std::size_t>(m) * m, 0.0);
+    Eigen::Map<Eigen::MatrixXd> T(s_.T.data(), m, m);
+    const Eigen::Map<const Eigen::MatrixXd> L(s_.M.data(), m_, m_);
+    for (int c = 0; c < q; ++c)
+      for (int r = c; r < q; ++r) T(r, c) = L(s_.kept[r], s_.kept[c]);
+    // W_KK = T Tᵀ + Σ_d x_d x_dᵀ (x_d: dropped column d on the kept rows): rank-1 updates.
+    s_.b.resize(q);
+    for (std::size_t d = 0, r0 = 0; d < s_.dropped.size(); ++d) {
+      while (r0 < s_.kept.size() && s_.kept[r0] < s_.dropped[d]) ++r0;
+      for (int r = static_cast<int>(r0); r < q; ++r) s_.b[r] = L(s_.kept[r], s_.dropped[d]);
+      for (int k = static_cast<int>(r0); k < q; ++k) {
+        const double tkk = T(k, k), xk = s_.b[k];
+        const double rkk = std::hypot(tkk, xk);
+        if (!(tkk > 0.0) || !std::isfinite(rkk)) return false;
+        const double c = rkk / tkk, sn = xk / tkk;
+        T(k, k) = rkk;
+        for (int r = k + 1; r < q; ++r) {
+          const double t = (T(r, k) + sn * s_.b[r]) / c;
+          s_.b[r] = c * s_.b[r] - sn * t;
+          T(r, k) = t;
+        }
+      }
+    }
+    // New rows E: T_EK = W_EK T_KK⁻ᵀ, T_EE = chol(W_EE - T_EK T_EKᵀ).
+    const Eigen::Map<const Eigen::MatrixXd> W(s_.W.data(), n_, n_);
+    if (e > 0) {
+      for (int a = 0; a < e; ++a)
+        for (int c = 0; c < q; ++c) T(q + a, c) = W(s_.added[a], s_.index[s_.kept[c]]);
+      auto TEK = T.block(q, 0, e, q);
+      if (q > 0) {
+        const auto TKK = T.topLeftCorner(q, q).triangularView<Eigen::Lower>();
+        TKK.transpose().solveInPlace<Eigen::OnTheRight>(TEK);
+      }
+      for (int a = 0; a < e; ++a)
+        for (int b = a; b < e; ++b) T(q + b, q + a) = W(s_.added[b], s_.added[a]);
+      auto TEE = T.block(q, q, e, e);
+      if (q > 0) TEE.selfadjointView<Eigen::Lower>().rankUpdate(TEK, -1.0);
+      Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(TEE);
+      if (llt.info() != Eigen::Success) return false;
+    }
+    if (!T.diagonal().allFinite()) return false;
+    // The new order: the kept rows as they were, then the new ones.
+    for (int r = 0; r < q; ++r) s_.kept[r] = s_.index[s_.kept[r]];
+    s_.index.assign(s_.kept.begin(), s_.kept.end());
+    s_.index.insert(s_.index.end(), s_.added.begin(), s_.added.end());
+    s_.M.swap(s_.T);
+    m_ = m;
+    return true;
+  }
+  static constexpr double kUpdateFlopCost = 4.0;
+
   DenseScratch& s_;
   int n_ = 0, m_ = 0;
+  bool factored_ = false;  // M holds the Cholesky factor of the last set (index's order)
   bool semidefinite_ = false;
   double zero_pivot_ = 0.0;
 };
