@@ -526,6 +526,23 @@ TEST(Islands, TheBodyFormSplitsByBodyAndEqualsTheWholeUnbuiltSolve) {
 
 // ---- the symmetric active-set Newton ----------------------------------------------------
 
+// An LCP's answer, checked independently of the solver: the residual recomputed from W,
+// λ >= 0, d = W λ + d_free >= 0 and λ_i d_i = 0 to `tol`, and Lemke's pivoting (exact,
+// another method) to 1e-8.
+void expectLcpSolution(const Problem& p, const SolveResult& r, double tol) {
+  EXPECT_LE(recomputedResidual(p, r.forces), tol);
+  Eigen::VectorXd d;
+  multiply(p.W, r.forces, d);
+  d += p.d_free;
+  const double scale = p.d_free.norm();
+  EXPECT_GE(r.forces.minCoeff(), 0.0);
+  EXPECT_GE(d.minCoeff(), -tol * scale);
+  EXPECT_LE(r.forces.cwiseProduct(d).cwiseAbs().maxCoeff(), tol * scale * (1.0 + r.forces.maxCoeff()));
+  const SolveResult lemke = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-13, 100000, false));
+  ASSERT_TRUE(lemke.converged) << lemke.message;
+  EXPECT_LE(maxDiff(r.forces, lemke.forces), 1e-8);
+}
+
 TEST(SymmetricNewton, SolvesLcpsAndTheResidualOfItsForcesIsTheTolerance) {
   for (int groups : {1, 3, 40}) {  // 40 × 5 rows > the dense limit: the sparse LDLT path
     for (bool sparse : {false, true}) {
@@ -534,25 +551,14 @@ TEST(SymmetricNewton, SolvesLcpsAndTheResidualOfItsForcesIsTheTolerance) {
       const SolveResult r = solveProblem(p, paramsFor(SolverKind::kNewton, 1e-10, 1000, false));
       ASSERT_TRUE(r.converged) << r.message;
       EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
-      EXPECT_LE(recomputedResidual(p, r.forces), 1e-10);
-      Eigen::VectorXd d;
-      multiply(p.W, r.forces, d);
-      d += p.d_free;
-      const double scale = p.d_free.norm();
-      EXPECT_GE(r.forces.minCoeff(), 0.0);
-      EXPECT_GE(d.minCoeff(), -1e-10 * scale);
-      EXPECT_LE(r.forces.cwiseProduct(d).cwiseAbs().maxCoeff(), 1e-10 * scale * (1.0 + r.forces.maxCoeff()));
-      const SolveResult lemke = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-12, 100000, false));
-      ASSERT_TRUE(lemke.converged);
-      EXPECT_LE(maxDiff(r.forces, lemke.forces), 1e-8);
+      expectLcpSolution(p, r, 1e-10);
     }
   }
 }
 
 // Dense LCPs of 60-250 rows whose active set moves by a few rows per step: from the second
 // step on the Cholesky factor is updated (rows dropped by rank-1 updates, new rows appended)
-// instead of computed again. The answer is checked as above: complementarity and the residual
-// recomputed from W, and Lemke's pivoting (exact, another method) to 1e-8.
+// instead of computed again. The answer is checked as above (expectLcpSolution).
 TEST(SymmetricNewton, UpdatedFactorsGiveTheSameSolutionAsLemke) {
   int steps_checked = 0;
   for (int n : {60, 150, 250}) {
@@ -563,16 +569,8 @@ TEST(SymmetricNewton, UpdatedFactorsGiveTheSameSolutionAsLemke) {
       ASSERT_TRUE(r.converged) << r.message;
       EXPECT_NE(r.message.find("active-set"), std::string::npos) << r.message;
       if (r.iterations >= 2) ++steps_checked;
-      EXPECT_LE(recomputedResidual(p, r.forces), 1e-12);
-      Eigen::VectorXd d;
-      multiply(p.W, r.forces, d);
-      d += p.d_free;
-      const double scale = p.d_free.norm();
-      EXPECT_GE(r.forces.minCoeff(), 0.0);
-      EXPECT_GE(d.minCoeff(), -1e-12 * scale);
-      const SolveResult lemke = solveProblem(p, paramsFor(SolverKind::kLemke, 1e-13, 100000, false));
-      ASSERT_TRUE(lemke.converged) << lemke.message;
-      EXPECT_LE(maxDiff(r.forces, lemke.forces), 1e-8) << n << " " << seed;
+      SCOPED_TRACE(testing::Message() << n << " rows, seed " << seed);
+      expectLcpSolution(p, r, 1e-12);
     }
   }
   EXPECT_GE(steps_checked, 4) << "most of these need more than one Newton step";
