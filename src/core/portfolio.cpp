@@ -204,6 +204,22 @@ double newtonCostSweeps(const SolveContext& ctx, int steps) {
   return kNewtonWarmupSweeps + steps * newtonStepSweeps(ctx);
 }
 
+// newton's modeled cost in sweeps from a probe's iterate after `probe_sweeps` plain sweeps at
+// `residual`: what is left of its warm-up (none once that tolerance is met) and `steps` steps.
+double newtonCostFrom(const SolveContext& ctx, int steps, int probe_sweeps, double residual) {
+  const bool warmed = residual <= std::max(ctx.params->tolerance, kNewtonWarmupTolerance);
+  return (warmed ? 0 : std::max(0, kNewtonWarmupSweeps - probe_sweeps)) + steps * newtonStepSweeps(ctx);
+}
+
+// The rate per sweep of Gauss-Seidel over-relaxed by ω where its plain rate is ρ, for a linear,
+// consistently ordered W (Young): the larger root of (r + ω - 1)² = r ω² ρ, ω - 1 past Young's ω.
+double sorRate(double rho, double omega) {
+  const double disc = omega * omega * rho - 4.0 * (omega - 1.0);
+  if (disc < 0.0) return omega - 1.0;
+  const double root = 0.5 * (omega * std::sqrt(rho) + std::sqrt(disc));
+  return root * root;
+}
+
 // Whether the apgd scout goes on, after `iterations` in all, with `needed` more forecast by
 // its last slice's rate (kAutoScoutIterations, kAutoScoutNewtonSteps).
 bool scoutGoesOn(const SolveContext& ctx, int iterations, double needed) {
@@ -217,6 +233,40 @@ bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
                        (std::holds_alternative<Eigen::MatrixXd>(ctx.problem->W) || n <= kAutoNewtonRows);
   return counted && sweeps > newtonCostSweeps(ctx, kAutoNewtonSteps);
 }
+// The probe's last window, at a loose tolerance where a small problem's plan is newton
+// (kAutoNewtonSmallRows): where the probe's stages stop because their plain rate ρ asks for
+// more sweeps (twice the forecast, as above) than newton's modeled cost from the probe's
+// iterate (what is left of its warm-up, then kAutoNewtonSteps steps of n/3 sweeps), but
+// Young's theory says over-relaxed sweeps would fit (sorRate), kAutoOmegaTrial sweeps run at
+// Young's ω for ρ. Where they meet the tolerance, or their own rate forecasts the rest within
+// newton's cost, Gauss-Seidel goes first at that ω; otherwise the window is dropped and the
+// plan goes on as it would have (its sweeps lost, at most a third of newton's warm-up on a
+// problem of at most 32 rows). Its forecast is taken once, not twice: over-relaxed sweeps start
+// slow and speed up past their transient (OneObject-i1028's first sweep at ω = 1.5 raised the
+// residual 1.6x, its later ones fell 0.92-0.94 per sweep against plain sweeps' 0.97).
+// MuJoCo's rope at 1e-3 (12 rows): the window met the tolerance, 14 sweeps in all where newton
+// took its warm-up and a step (0.72x the time).
+// Not at a tight tolerance: there a small problem's newton ends in a few quadratic steps
+// (Siconos' rovers at 1e-8..1e-10: 8-13 sweeps at ω against 6-9 iterations, 1.0-1.2x the
+// time), and on the scout's plans (multi-point, rank-deficient contacts) newton's steps were
+// as slow as the model's eight (OneObject-i1028 at 1e-4: 7 steps; the window kept Gauss-Seidel
+// at 0.45x the time) or one step ended it (a condim-6 box stack written after this rule, 60
+// rows: the window's ω swept slower than plain and its ten sweeps cost 1.27x at 1e-4..1e-10),
+// and no feature measured told the two apart.
+// Returns that ω where the window is due (0 where not), and in *newton_cost the sweeps its
+// forecast must fit: the probe's last stage ran `iterations` plain sweeps from `from` to `to`,
+// `needed` more forecast, `probe_sweeps` in all.
+double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double from, double to, int iterations,
+                       double needed, double* newton_cost) {
+  if (ctx.params->tolerance < kAutoTightTolerance) return 0.0;
+  const double rho = std::pow(to / from, 1.0 / iterations);
+  const double omega = youngOmega(rho);
+  *newton_cost = newtonCostFrom(ctx, kAutoNewtonSteps, probe_sweeps, to);
+  const double young_needed = needed * std::log(rho) / std::log(sorRate(rho, omega));
+  const bool due = 2.0 * needed > *newton_cost && std::max<double>(young_needed, kAutoOmegaTrial) < *newton_cost;
+  return due ? omega : 0.0;
+}
+
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
  public:
@@ -1443,6 +1493,51 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
             cur.slice = std::min(cur.slice, kAutoOmegaTrial);
           stage_start = best_residual;
           continue;
+        }
+      }
+      // The plain rate leaves the sweeps behind newton's modeled cost: one window at Young's ω
+      // may not (lastOmegaWindow). Kept, Gauss-Seidel goes first at that ω.
+      double newton_cost = 0.0;
+      const double omega =
+          adapt_omega && omega_state == 0 && probe_kind == SolverKind::kNlgs && std::isfinite(needed) &&
+                  r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
+                  r.status != SolveStatus::kTimeBudget && planned().front() == SolverKind::kNewton &&
+                  used + kAutoOmegaTrial <= params.maxIt
+              ? lastOmegaWindow(ctx, probe_sweeps, stage_start, best_residual, r.iterations, needed, &newton_cost)
+              : 0.0;
+      if (omega > 0.0) {
+        const Clock::time_point w0 = Clock::now();
+        x = best;
+        member_params.maxIt = kAutoOmegaTrial;
+        member_params.sor = omega;
+        member_params.tolerance = params.tolerance;
+        member.start_residual = best_residual;
+        member.has_trial_deadline = false;
+        const KernelReport wr = runKernel(probe_kind, member, x);
+        if (needs_zeroing) zeroInactiveRows(ctx, x);
+        used += wr.iterations;
+        stages->back().second += std::chrono::duration<double>(Clock::now() - w0).count();
+        const double w_residual = !x.allFinite() || failedToRun(wr.status) ? std::numeric_limits<double>::infinity()
+                                  : ctx.residual(x);
+        if (w_residual < best_residual) {
+          const bool solved = w_residual <= params.tolerance;
+          const double w_needed =
+              solved ? 0.0 : iterationsToReach(params.tolerance, best_residual, w_residual, wr.iterations);
+          if (solved || wr.iterations + w_needed <= newton_cost) {
+            best.swap(x);
+            best_residual = best_error = w_residual;
+            best_model = FrictionModel::kCoulombDisc;
+            if (solved) {
+              report.status = SolveStatus::kConverged;
+              break;
+            }
+            gs_omega = omega;
+            omega_state = 2;
+            startPlan();
+            moveFirst(members, probe_kind);
+            m = 0;
+            continue;
+          }
         }
       }
       // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate.
