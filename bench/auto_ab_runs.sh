@@ -21,11 +21,11 @@ for round in 1 2; do
   for side in 0 1; do
     if [ "$side" = 1 ]; then E="$VARIANT_ENV"; else E=""; fi
     if [ "$WHAT" != heldout ]; then
-      env $E "$W" --solvers auto --tolerances $T --out "$OUT/t_s_${side}_$round.csv" --regret "$OUT/r.md" >/dev/null
+      env $E "$W" --solvers auto --tolerances $T --out "$OUT/t_s_${side}_$round.csv" --regret "$OUT/r.md" >/dev/null 2>&1
     fi
     if [ "$WHAT" != study ]; then
       env $E "$W" --solvers auto --tolerances $T --families mujoco --mujoco-models "$L" --mujoco-steps 300,1000 \
-        --out "$OUT/t_h_${side}_$round.csv" --regret "$OUT/r.md" >/dev/null
+        --out "$OUT/t_h_${side}_$round.csv" --regret "$OUT/r.md" >/dev/null 2>&1
     fi
     echo "round $round side $side done $(date +%T)"
   done

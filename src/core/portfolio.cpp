@@ -1180,6 +1180,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
                         // 3: the probe's plain window after the one at ω
   double omega_rate = 1.0;  // the probe's window at ω: its rate per sweep
   double kept_omega = 1.0;  // and its ω
+  // The probe's rate put Gauss-Seidel before a planned apgd (gs_in_slice, below); the sweeps
+  // its plain window then forecast (0: none measured).
+  bool gs_before_apgd = false;
+  double gs_window_needed = 0.0;
   // newton's sticking active-set path from `best`, once per solve (stickingPays); true when it
   // ends the solve.
   bool sticking_tried = false;
@@ -1366,6 +1370,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       const double rate = windowRate();
       if (omega_state == 0) {  // the trial only where the plain sweeps would outlast it
         plain_rate = rate;
+        if (gs_before_apgd && window_moved)
+          gs_window_needed = iterationsToReach(params.tolerance, start_residual, residual, r.iterations);
         omega_state = window_moved && iterationsToReach(params.tolerance, start_residual, residual,
                                                         r.iterations) > kAutoOmegaTrial
                           ? 1
@@ -1399,6 +1405,25 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
                      &stick_recheck) &&
         stickingPathSolves())
       break;
+    // Gauss-Seidel went before a planned apgd on the probe's forecast that its sweeps fit one
+    // slice. Where the plan says apgd's momentum carries this W (apgdHolds: faces resting on
+    // faces) and Gauss-Seidel's first plain window after the probe says its sweeps no longer
+    // fit, apgd goes first again, from the start as planned (from a Gauss-Seidel iterate it
+    // crawls). BoxesStack1 at 1e-3: the probe forecast 45 sweeps in all, the window 118; nlgs
+    // takes 226, apgd 95 iterations (213 sweeps before, 0.71x the time now). Not where apgd
+    // does not hold: MuJoCo's hammock at 1e-2 (joints) forecast 80 sweeps, then 207 after its
+    // window, and Gauss-Seidel's rate then rose again, 82 sweeps in all where apgd took 499.
+    if (gs_before_apgd && gs_window_needed > 0.0 && plan_apgd_holds) {
+      gs_before_apgd = false;
+      if (used + gs_window_needed > firstSlice(cur.kind)) {
+        for (PortfolioMember& mem : members)
+          if (mem.kind == SolverKind::kApgd) mem.retry_origin = 1;
+        if (moveFirst(members, SolverKind::kApgd)) {
+          m = 0;
+          continue;
+        }
+      }
+    }
     if (saved_slice > 0 && !failedToRun(r.status)) continue;  // a trial window is no slice: no stall test
     if (cur.scout) {
       // Go on while the rate of its last slice (the first: from the start) reaches the
@@ -1582,7 +1607,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           (params.tolerance >= kAutoTwoDigits ||
            (params.tolerance >= kAutoTightTolerance && rate_past_first_stage &&
             !newtonCheaperThanSweeps(ctx, probe_sweeps + needed))))
-        moveFirst(members, probe_kind);
+        gs_before_apgd = moveFirst(members, probe_kind);
       // Where apgd would go first at a loose tolerance and the probe's rate says Gauss-Seidel
       // needs more sweeps than newton's warm-up and kAutoNewtonSteps factorizations cost
       // (newtonCheaperThanSweeps), but at most twice that, newton goes on from the probe's

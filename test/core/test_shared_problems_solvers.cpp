@@ -128,6 +128,24 @@ TEST(SharedProblemsSolvers, AScoutWhoseForecastIsShorterThanItsRunGoesOnPastItsC
   EXPECT_LE(solvers_test::recomputedResidual(p, r.forces), tol);
 }
 
+// The probe's rate put Gauss-Seidel before a planned apgd, on faces resting on faces, because
+// its sweeps seemed to fit one slice; its first plain window after the probe says they no
+// longer do, and apgd goes first again, from the start (portfolio.cpp, gs_before_apgd):
+// BoxesStack1 at 1e-3, whose probe forecast 45 sweeps in all and whose window 118, where nlgs
+// takes 226 and apgd 95 iterations. Before, auto swept 213 times. Independently: under 60 % of
+// plain nlgs's sweeps, and the residual recomputed from the forces.
+TEST(SharedProblemsSolvers, GaussSeidelWhoseForecastOutgrowsItsSliceHandsBackToApgd) {
+  const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / "BoxesStack1-i100000-32.hdf5.dat").string());
+  const double tol = 1e-3;
+  const SolveResult nlgs = solveProblem(p, params(SolverKind::kNlgs, tol, 100000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const SolveResult r = solveProblem(p, params(SolverKind::kAuto, tol, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_NE(r.solver.find("nlgs->apgd"), std::string::npos) << r.solver;
+  EXPECT_LT(10 * r.iterations, 6 * nlgs.iterations) << r.solver << " against nlgs's " << nlgs.iterations;
+  EXPECT_LE(solvers_test::recomputedResidual(p, r.forces), tol);
+}
+
 // Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
 TEST(SharedProblemsSolvers, NewtonReachesTenDigitsOnTheRankDeficientStacks) {
   for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat"}) {
