@@ -208,7 +208,7 @@ double newtonCostSweeps(const SolveContext& ctx, int steps) {
 // `residual`: what is left of its warm-up (none once that tolerance is met) and `steps` steps.
 double newtonCostFrom(const SolveContext& ctx, int steps, int probe_sweeps, double residual) {
   const bool warmed = residual <= std::max(ctx.params->tolerance, kNewtonWarmupTolerance);
-  return (warmed ? 0 : std::max(0, kNewtonWarmupSweeps - probe_sweeps)) + steps * newtonStepSweeps(ctx);
+  return newtonCostSweeps(ctx, steps) - (warmed ? kNewtonWarmupSweeps : std::min(probe_sweeps, kNewtonWarmupSweeps));
 }
 
 // The rate per sweep of Gauss-Seidel over-relaxed by ω where its plain rate is ρ, for a linear,
@@ -1166,6 +1166,20 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     saved.error = best_error;
     saved.model = best_model;
   };
+  // A few Gauss-Seidel sweeps of `kind` at `omega` from x outside any member's slice (the
+  // probe's last window, a drift's jump), counted against maxIt. `start`: x's residual, NaN
+  // where not known.
+  auto sweepsOutsideSlices = [&](SolverKind kind, int sweeps, double omega, double start) {
+    member_params.maxIt = sweeps;
+    member_params.sor = omega;
+    member_params.tolerance = params.tolerance;
+    member.start_residual = start;
+    member.has_trial_deadline = false;
+    const KernelReport swept = runKernel(kind, member, x);
+    if (needs_zeroing) zeroInactiveRows(ctx, x);
+    used += swept.iterations;
+    return swept;
+  };
   auto restoreBest = [&](SavedBest& saved) {
     best.swap(saved.x);
     best_residual = saved.residual;
@@ -1533,14 +1547,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       if (omega > 0.0) {
         const Clock::time_point w0 = Clock::now();
         x = best;
-        member_params.maxIt = kAutoOmegaTrial;
-        member_params.sor = omega;
-        member_params.tolerance = params.tolerance;
-        member.start_residual = best_residual;
-        member.has_trial_deadline = false;
-        const KernelReport wr = runKernel(probe_kind, member, x);
-        if (needs_zeroing) zeroInactiveRows(ctx, x);
-        used += wr.iterations;
+        const KernelReport wr = sweepsOutsideSlices(probe_kind, kAutoOmegaTrial, omega, best_residual);
         stages->back().second += std::chrono::duration<double>(Clock::now() - w0).count();
         const double w_residual = !x.allFinite() || failedToRun(wr.status) ? std::numeric_limits<double>::infinity()
                                   : ctx.residual(x);
@@ -1668,13 +1675,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         const Clock::time_point j0 = Clock::now();
         x = best + step * x;
         projectFeasible(ctx, x);
-        member_params.maxIt = kAutoDriftSweeps;
-        member_params.sor = 1.0;
-        member.start_residual = std::numeric_limits<double>::quiet_NaN();
-        member.has_trial_deadline = false;
-        const KernelReport jr = runKernel(cur.kind, member, x);
-        if (needs_zeroing) zeroInactiveRows(ctx, x);
-        used += jr.iterations;
+        sweepsOutsideSlices(cur.kind, kAutoDriftSweeps, 1.0, std::numeric_limits<double>::quiet_NaN());
         const double jump_seconds = std::chrono::duration<double>(Clock::now() - j0).count();
         stages->back().second += jump_seconds;
         seconds += jump_seconds;
