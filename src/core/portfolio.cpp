@@ -1384,12 +1384,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       const double rate = windowRate();
       if (omega_state == 0) {  // the trial only where the plain sweeps would outlast it
         plain_rate = rate;
-        if (gs_before_apgd && window_moved)
-          gs_window_needed = iterationsToReach(params.tolerance, start_residual, residual, r.iterations);
-        omega_state = window_moved && iterationsToReach(params.tolerance, start_residual, residual,
-                                                        r.iterations) > kAutoOmegaTrial
-                          ? 1
-                          : 2;
+        const double window_needed =  // read only where the window moved
+            window_moved ? iterationsToReach(params.tolerance, start_residual, residual, r.iterations) : 0.0;
+        if (gs_before_apgd) gs_window_needed = window_needed;
+        omega_state = window_moved && window_needed > kAutoOmegaTrial ? 1 : 2;
       } else {
         if (!(rate < plain_rate)) gs_omega = 1.0;
         omega_state = 2;
