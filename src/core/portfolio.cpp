@@ -252,19 +252,41 @@ bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
 // as slow as the model's eight (OneObject-i1028 at 1e-4: 7 steps; the window kept Gauss-Seidel
 // at 0.45x the time) or one step ended it (a condim-6 box stack written after this rule, 60
 // rows: the window's ω swept slower than plain and its ten sweeps cost 1.27x at 1e-4..1e-10),
-// and no feature measured told the two apart.
+// and no feature measured told the two apart. Except within newton's warm-up
+// (omegaWindowsWithinWarmup), where a window that is dropped costs nothing.
 // Returns that ω where the window is due (0 where not), and in *newton_cost the sweeps its
 // forecast must fit: the probe's last stage ran `iterations` plain sweeps from `from` to `to`,
 // `needed` more forecast, `probe_sweeps` in all.
 double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double from, double to, int iterations,
-                       double needed, double* newton_cost) {
-  if (ctx.params->tolerance < kAutoTightTolerance) return 0.0;
+                       double needed, double* newton_cost, bool within_warmup) {
+  if (ctx.params->tolerance < kAutoTightTolerance && !within_warmup) return 0.0;
   const double rho = std::pow(to / from, 1.0 / iterations);
   const double omega = youngOmega(rho);
   *newton_cost = newtonCostFrom(ctx, kAutoNewtonSteps, probe_sweeps, to);
   const double young_needed = needed * std::log(rho) / std::log(sorRate(rho, omega));
   const bool due = 2.0 * needed > *newton_cost && std::max<double>(young_needed, kAutoOmegaTrial) < *newton_cost;
   return due ? omega : 0.0;
+}
+
+// The probe's window at Young's ω as part of newton's warm-up, on the scout's plans at a tight
+// tolerance. newton's warm-up is kNewtonWarmupSweeps nlgs sweeps, of which the probe ran
+// `probe_sweeps`; the window's sweeps, over-relaxed, are the next ones: where its forecast
+// does not fit newton's cost its iterate, when it lowered the residual, is where newton's
+// warm-up goes on from (the condim-6 box stack: its one Newton step as before, at the same
+// time), so that the window is nearly free. Where the window beat the plain stage's rate
+// without fitting yet, a second one runs the rest of the warm-up: over-relaxed sweeps start
+// slow (OneObject-i1028 at 1e-4: 0.974 per sweep in the first window against the plain
+// stage's 0.979, then 0.91 in the second, which forecast 32 sweeps more where newton's steps
+// took the time of about 110; `auto:nlgs`, 71 sweeps, 0.49x the time).
+// Only where that plain stage swept slower than kAutoOmegaSlowRate per sweep: Young's ω
+// describes sweeps that have reached their asymptotic rate, the slowest mode's, which from the
+// start only sweeps that slow already have; faster early sweeps are the faster modes' transient,
+// and an ω taken from their rate over-relaxes an iterate whose active set has not settled
+// (OneObject-i100000: three sweeps at 0.89, then its window at ω = 1.5 raised the residual
+// 1.8x and was lost, 1.15x the time at 1e-5..1e-10).
+constexpr double kAutoOmegaSlowRate = 0.95;
+bool omegaWindowsWithinWarmup(int probe_sweeps, double stage_rate) {
+  return probe_sweeps + kAutoOmegaTrial <= kNewtonWarmupSweeps && stage_rate >= kAutoOmegaSlowRate;
 }
 
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
@@ -1535,39 +1557,56 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // The plain rate leaves the sweeps behind newton's modeled cost: one window at Young's ω
       // may not (lastOmegaWindow). Kept, Gauss-Seidel goes first at that ω.
       double newton_cost = 0.0;
+      const bool within_warmup =
+          plan_scout && friction && !warmup_over && r.iterations > 0 && best_residual < stage_start &&
+          omegaWindowsWithinWarmup(probe_sweeps, std::pow(best_residual / stage_start, 1.0 / r.iterations));
       const double omega =
           adapt_omega && omega_state == 0 && probe_kind == SolverKind::kNlgs && std::isfinite(needed) &&
                   r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
                   r.status != SolveStatus::kTimeBudget && planned().front() == SolverKind::kNewton &&
                   used + kAutoOmegaTrial <= params.maxIt
-              ? lastOmegaWindow(ctx, probe_sweeps, stage_start, best_residual, r.iterations, needed, &newton_cost)
+              ? lastOmegaWindow(ctx, probe_sweeps, stage_start, best_residual, r.iterations, needed, &newton_cost,
+                                within_warmup)
               : 0.0;
       if (omega > 0.0) {
-        const Clock::time_point w0 = Clock::now();
-        x = best;
-        const KernelReport wr = sweepsOutsideSlices(probe_kind, kAutoOmegaTrial, omega, best_residual);
-        stages->back().second += std::chrono::duration<double>(Clock::now() - w0).count();
-        const double w_residual = !x.allFinite() || failedToRun(wr.status) ? std::numeric_limits<double>::infinity()
-                                  : ctx.residual(x);
-        if (w_residual < best_residual) {
-          const bool solved = w_residual <= params.tolerance;
+        const double stage_rate = std::pow(best_residual / stage_start, 1.0 / r.iterations);
+        int window_sweeps = 0;  // the windows' sweeps so far
+        bool gs_goes_first = false;
+        bool solved = false;
+        for (int window = 0; window < 2; ++window) {
+          const int length = window == 0 ? kAutoOmegaTrial : kNewtonWarmupSweeps - probe_sweeps;
+          if (window == 1 && (!within_warmup || length < kAutoProbeFirst)) break;
+          const Clock::time_point w0 = Clock::now();
+          x = best;
+          const KernelReport wr = sweepsOutsideSlices(probe_kind, length, omega, best_residual);
+          stages->back().second += std::chrono::duration<double>(Clock::now() - w0).count();
+          window_sweeps += wr.iterations;
+          const double w_residual = !x.allFinite() || failedToRun(wr.status) ? std::numeric_limits<double>::infinity()
+                                    : ctx.residual(x);
+          if (!(w_residual < best_residual)) break;
+          solved = w_residual <= params.tolerance;
           const double w_needed =
               solved ? 0.0 : iterationsToReach(params.tolerance, best_residual, w_residual, wr.iterations);
-          if (solved || wr.iterations + w_needed <= newton_cost) {
-            best.swap(x);
-            best_residual = best_error = w_residual;
-            best_model = FrictionModel::kCoulombDisc;
-            if (solved) {
-              report.status = SolveStatus::kConverged;
-              break;
-            }
-            gs_omega = omega;
-            omega_state = 2;
-            startPlan();
-            moveFirst(members, probe_kind);
-            m = 0;
-            continue;
-          }
+          const double w_rate = std::pow(w_residual / best_residual, 1.0 / wr.iterations);
+          gs_goes_first = solved || window_sweeps + w_needed <= newton_cost;
+          if (!within_warmup && !gs_goes_first) break;
+          best.swap(x);
+          best_residual = best_error = w_residual;
+          best_model = FrictionModel::kCoulombDisc;
+          if (within_warmup) probe_sweeps += wr.iterations;
+          if (gs_goes_first || !(w_rate < stage_rate)) break;
+        }
+        if (solved) {
+          report.status = SolveStatus::kConverged;
+          break;
+        }
+        if (gs_goes_first) {
+          gs_omega = omega;
+          omega_state = 2;
+          startPlan();
+          moveFirst(members, probe_kind);
+          m = 0;
+          continue;
         }
       }
       // Not solved. A plan that starts with Gauss-Seidel continues from the probe's iterate.

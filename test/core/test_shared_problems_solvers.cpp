@@ -146,6 +146,35 @@ TEST(SharedProblemsSolvers, GaussSeidelWhoseForecastOutgrowsItsSliceHandsBackToA
   EXPECT_LE(solvers_test::recomputedResidual(p, r.forces), tol);
 }
 
+// On the scout's plans at a tight tolerance the probe's windows at Young's ω run as newton's
+// warm-up (portfolio.cpp, omegaWindowsWithinWarmup), where plain sweeps from the start already
+// fall slower than 0.95 per sweep: OneObject-i1028 at 1e-4 (0.979), whose second window
+// forecast the rest within newton's cost, is solved by Gauss-Seidel at ω, `auto:nlgs`, where
+// plain nlgs takes 196 sweeps and auto took newton's 7 slow steps after its scout (2.1x nlgs
+// at ω = 1.3). OneObject-i100000 at 1e-6 (0.89 per sweep) runs none: the probe's three sweeps,
+// the scout's twenty and newton's own iterations after those three. Independently: the residual
+// recomputed from the forces.
+TEST(SharedProblemsSolvers, TheProbeOverRelaxesWithinNewtonsWarmUpWherePlainSweepsAreSlowFromTheStart) {
+  const fs::path dir = fs::path(LCS_PROBLEMS_DIR) / "fc3d";
+  const Problem slow = readProblemFile((dir / "OneObject-i1028-138.hdf5.dat").string());
+  const SolveResult nlgs = solveProblem(slow, params(SolverKind::kNlgs, 1e-4, 100000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const SolveResult r = solveProblem(slow, params(SolverKind::kAuto, 1e-4, 100000));
+  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs");
+  EXPECT_LT(2 * r.iterations, nlgs.iterations) << r.solver;
+  EXPECT_LE(solvers_test::recomputedResidual(slow, r.forces), 1e-4);
+
+  const Problem fast = readProblemFile((dir / "OneObject-i100000-316.hdf5.dat").string());
+  const SolveResult newton = solveProblem(fast, params(SolverKind::kNewton, 1e-6, 100000));
+  ASSERT_TRUE(newton.converged) << newton.message;
+  const SolveResult f = solveProblem(fast, params(SolverKind::kAuto, 1e-6, 100000));
+  ASSERT_TRUE(f.converged) << f.solver << ": " << f.message;
+  EXPECT_EQ(f.solver, "auto:nlgs->apgd->newton");
+  EXPECT_LE(f.iterations, newton.iterations + 20) << "no window's sweeps on top of the scout's";
+  EXPECT_LE(solvers_test::recomputedResidual(fast, f.forces), 1e-6);
+}
+
 // Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
 TEST(SharedProblemsSolvers, NewtonReachesTenDigitsOnTheRankDeficientStacks) {
   for (const std::string name : {"BoxesStack1-i100000-32.hdf5.dat", "OneObject-i100000-316.hdf5.dat"}) {
