@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <utility>
 
 namespace lcp_contact_solver::core {
 namespace {
@@ -146,6 +147,18 @@ TEST(SharedProblemsSolvers, GaussSeidelWhoseForecastOutgrowsItsSliceHandsBackToA
   EXPECT_LE(solvers_test::recomputedResidual(p, r.forces), tol);
 }
 
+// `reference` and auto on the shared fc3d problem `name` at `tol`, both converged, auto's
+// forces meeting the tolerance when the residual is recomputed from them.
+std::pair<SolveResult, SolveResult> referenceAndAuto(const std::string& name, double tol, SolverKind reference) {
+  const Problem p = readProblemFile((fs::path(LCS_PROBLEMS_DIR) / "fc3d" / name).string());
+  SolveResult ref = solveProblem(p, params(reference, tol, 100000));
+  SolveResult automatic = solveProblem(p, params(SolverKind::kAuto, tol, 100000));
+  EXPECT_TRUE(ref.converged) << name << ": " << ref.message;
+  EXPECT_TRUE(automatic.converged) << name << ": " << automatic.solver << ": " << automatic.message;
+  EXPECT_LE(solvers_test::recomputedResidual(p, automatic.forces), tol) << name;
+  return {std::move(ref), std::move(automatic)};
+}
+
 // On the scout's plans at a tight tolerance the probe's windows at Young's ω run as newton's
 // warm-up (portfolio.cpp, omegaWindowsWithinWarmup), where plain sweeps from the start already
 // fall slower than 0.95 per sweep: OneObject-i1028 at 1e-4 (0.979), whose second window
@@ -155,24 +168,12 @@ TEST(SharedProblemsSolvers, GaussSeidelWhoseForecastOutgrowsItsSliceHandsBackToA
 // the scout's twenty and newton's own iterations after those three. Independently: the residual
 // recomputed from the forces.
 TEST(SharedProblemsSolvers, TheProbeOverRelaxesWithinNewtonsWarmUpWherePlainSweepsAreSlowFromTheStart) {
-  const fs::path dir = fs::path(LCS_PROBLEMS_DIR) / "fc3d";
-  const Problem slow = readProblemFile((dir / "OneObject-i1028-138.hdf5.dat").string());
-  const SolveResult nlgs = solveProblem(slow, params(SolverKind::kNlgs, 1e-4, 100000));
-  ASSERT_TRUE(nlgs.converged) << nlgs.message;
-  const SolveResult r = solveProblem(slow, params(SolverKind::kAuto, 1e-4, 100000));
-  ASSERT_TRUE(r.converged) << r.solver << ": " << r.message;
-  EXPECT_EQ(r.solver, "auto:nlgs");
-  EXPECT_LT(2 * r.iterations, nlgs.iterations) << r.solver;
-  EXPECT_LE(solvers_test::recomputedResidual(slow, r.forces), 1e-4);
-
-  const Problem fast = readProblemFile((dir / "OneObject-i100000-316.hdf5.dat").string());
-  const SolveResult newton = solveProblem(fast, params(SolverKind::kNewton, 1e-6, 100000));
-  ASSERT_TRUE(newton.converged) << newton.message;
-  const SolveResult f = solveProblem(fast, params(SolverKind::kAuto, 1e-6, 100000));
-  ASSERT_TRUE(f.converged) << f.solver << ": " << f.message;
-  EXPECT_EQ(f.solver, "auto:nlgs->apgd->newton");
-  EXPECT_LE(f.iterations, newton.iterations + 20) << "no window's sweeps on top of the scout's";
-  EXPECT_LE(solvers_test::recomputedResidual(fast, f.forces), 1e-6);
+  const auto [nlgs, slow] = referenceAndAuto("OneObject-i1028-138.hdf5.dat", 1e-4, SolverKind::kNlgs);
+  EXPECT_EQ(slow.solver, "auto:nlgs");
+  EXPECT_LT(2 * slow.iterations, nlgs.iterations) << slow.solver;
+  const auto [newton, fast] = referenceAndAuto("OneObject-i100000-316.hdf5.dat", 1e-6, SolverKind::kNewton);
+  EXPECT_EQ(fast.solver, "auto:nlgs->apgd->newton");
+  EXPECT_LE(fast.iterations, newton.iterations + 20) << "no window's sweeps on top of the scout's";
 }
 
 // Where nlgs stalls near 1e-5..1e-6 (rank-deficient W), Newton goes to 1e-10.
