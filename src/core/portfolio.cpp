@@ -272,8 +272,8 @@ double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double from, d
 // tolerance. newton's warm-up is kNewtonWarmupSweeps nlgs sweeps, of which the probe ran
 // `probe_sweeps`; the window's sweeps, over-relaxed, are the next ones: where its forecast
 // does not fit newton's cost its iterate, when it lowered the residual, is where newton's
-// warm-up goes on from (the condim-6 box stack: its one Newton step as before, at the same
-// time), so that the window is nearly free. Where the window beat the plain stage's rate
+// warm-up goes on from (the condim-6 box stack, in a variant without the rate condition below:
+// its one Newton step as before, the same iterations in all), so that the window is nearly free. Where the window beat the plain stage's rate
 // without fitting yet, a second one runs the rest of the warm-up: over-relaxed sweeps start
 // slow (OneObject-i1028 at 1e-4: 0.974 per sweep in the first window against the plain
 // stage's 0.979, then 0.91 in the second, which forecast 32 sweeps more where newton's steps
@@ -1557,19 +1557,19 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // The plain rate leaves the sweeps behind newton's modeled cost: one window at Young's ω
       // may not (lastOmegaWindow). Kept, Gauss-Seidel goes first at that ω.
       double newton_cost = 0.0;
+      const bool stage_fell = r.iterations > 0 && best_residual < stage_start;
+      const double stage_rate = stage_fell ? std::pow(best_residual / stage_start, 1.0 / r.iterations) : 1.0;
       const bool within_warmup =
-          plan_scout && friction && !warmup_over && r.iterations > 0 && best_residual < stage_start &&
-          omegaWindowsWithinWarmup(probe_sweeps, std::pow(best_residual / stage_start, 1.0 / r.iterations));
+          plan_scout && friction && !warmup_over && stage_fell && omegaWindowsWithinWarmup(probe_sweeps, stage_rate);
       const double omega =
           adapt_omega && omega_state == 0 && probe_kind == SolverKind::kNlgs && std::isfinite(needed) &&
-                  r.iterations > 0 && best_residual < stage_start && !failedToRun(r.status) &&
+                  stage_fell && !failedToRun(r.status) &&
                   r.status != SolveStatus::kTimeBudget && planned().front() == SolverKind::kNewton &&
                   used + kAutoOmegaTrial <= params.maxIt
               ? lastOmegaWindow(ctx, probe_sweeps, stage_start, best_residual, r.iterations, needed, &newton_cost,
                                 within_warmup)
               : 0.0;
       if (omega > 0.0) {
-        const double stage_rate = std::pow(best_residual / stage_start, 1.0 / r.iterations);
         int window_sweeps = 0;  // the windows' sweeps so far
         bool gs_goes_first = false;
         bool solved = false;
