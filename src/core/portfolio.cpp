@@ -255,12 +255,11 @@ bool newtonCheaperThanSweeps(const SolveContext& ctx, double sweeps) {
 // and no feature measured told the two apart. Except within newton's warm-up
 // (omegaWindowsWithinWarmup), where a window that is dropped costs nothing.
 // Returns that ω where the window is due (0 where not), and in *newton_cost the sweeps its
-// forecast must fit: the probe's last stage ran `iterations` plain sweeps from `from` to `to`,
+// forecast must fit: the probe's last stage swept plainly at `rho` per sweep down to `to`,
 // `needed` more forecast, `probe_sweeps` in all.
-double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double from, double to, int iterations,
-                       double needed, double* newton_cost, bool within_warmup) {
+double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double rho, double to, double needed,
+                       double* newton_cost, bool within_warmup) {
   if (ctx.params->tolerance < kAutoTightTolerance && !within_warmup) return 0.0;
-  const double rho = std::pow(to / from, 1.0 / iterations);
   const double omega = youngOmega(rho);
   *newton_cost = newtonCostFrom(ctx, kAutoNewtonSteps, probe_sweeps, to);
   const double young_needed = needed * std::log(rho) / std::log(sorRate(rho, omega));
@@ -273,9 +272,9 @@ double lastOmegaWindow(const SolveContext& ctx, int probe_sweeps, double from, d
 // `probe_sweeps`; the window's sweeps, over-relaxed, are the next ones: where its forecast
 // does not fit newton's cost its iterate, when it lowered the residual, is where newton's
 // warm-up goes on from (the condim-6 box stack, in a variant without the rate condition below:
-// its one Newton step as before, the same iterations in all), so that the window is nearly free. Where the window beat the plain stage's rate
-// without fitting yet, a second one runs the rest of the warm-up: over-relaxed sweeps start
-// slow (OneObject-i1028 at 1e-4: 0.974 per sweep in the first window against the plain
+// its one Newton step as before, the same iterations in all), so that the window is nearly
+// free. Where the window beat the plain stage's rate without fitting yet, a second one runs the
+// rest of the warm-up: over-relaxed sweeps start slow (OneObject-i1028 at 1e-4: 0.974 per sweep in the first window against the plain
 // stage's 0.979, then 0.91 in the second, which forecast 32 sweeps more where newton's steps
 // took the time of about 110; `auto:nlgs`, 71 sweeps, 0.49x the time).
 // Only where that plain stage swept slower than kAutoOmegaSlowRate per sweep: Young's ω
@@ -1566,8 +1565,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
                   stage_fell && !failedToRun(r.status) &&
                   r.status != SolveStatus::kTimeBudget && planned().front() == SolverKind::kNewton &&
                   used + kAutoOmegaTrial <= params.maxIt
-              ? lastOmegaWindow(ctx, probe_sweeps, stage_start, best_residual, r.iterations, needed, &newton_cost,
-                                within_warmup)
+              ? lastOmegaWindow(ctx, probe_sweeps, stage_rate, best_residual, needed, &newton_cost, within_warmup)
               : 0.0;
       if (omega > 0.0) {
         int window_sweeps = 0;  // the windows' sweeps so far
