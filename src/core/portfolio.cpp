@@ -50,7 +50,8 @@ using Clock = std::chrono::steady_clock;
 // the residual from the start), then stage by stage while the rate of the last stage reaches
 // the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
-// (probeAllowance; ten again before a scout on faces resting on faces). A few weakly coupled
+// (probeAllowance; ten again before a scout on faces resting on faces, and before apgd at
+// three digits where most of their load sticks). A few weakly coupled
 // contacts with exact local solves end there, at a fraction of a Newton step's cost.
 // Otherwise a Gauss-Seidel plan goes on from the probe's iterate, newton too if the probe was
 // no longer than its own warm-up, and any other plan starts from the start, as it would have
@@ -132,7 +133,13 @@ constexpr int kAutoScoutRows = 30;
 // more; dropped at the cap, newton took 3.7 ms where apgd alone takes 1.4. The cost bound alone,
 // without the horizon, lost 2-3x on BoxesStack1 at 1e-5/1e-6, whose early rate promises what
 // apgd does not keep (20-40 iterations forecasting 140-200).
-constexpr int kAutoScoutNewtonSteps = 8;  // the low end of newton's 8-20 steps on such contacts
+constexpr int kAutoScoutNewtonSteps = 8;
+// A contact sticks where its tangential force is inside this fraction of μ λ_n
+// (slidingLoadShare), and the load is taken to stick (probeAllowance) where at most
+// kAutoSlidingLoad of it slides: between what the probe's iterate showed after three
+// sweeps on brick pyramids at rest (0.28-0.55 sliding) and on stacks pushed sideways (1.0).
+constexpr double kAutoStickInside = 0.99;
+constexpr double kAutoSlidingLoad = 0.75;  // the low end of newton's 8-20 steps on such contacts
 // Gauss-Seidel's over-relaxation ω, chosen online where the user left sor at 1: a plan's
 // Gauss-Seidel member first sweeps kAutoOmegaTrial times plainly, measuring its rate ρ per
 // sweep, then, if at that rate it would need more sweeps than that again, as many at Young's
@@ -305,6 +312,25 @@ class Plan {
   int size_ = 0;
 };
 
+// The share of the frictional contacts' normal load at `lambda` carried by contacts on the
+// edge of their friction cone (sliding; a μ = 0 contact's load does not slide in this sense:
+// apgd's shift μ |u_t| stays 0 there); 1 where no contact carries a load.
+double slidingLoadShare(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  const Problem& p = *ctx.problem;
+  double load = 0.0;
+  double sliding = 0.0;
+  for (std::size_t i = 0; i < p.contacts.size(); ++i) {
+    if (ctx.ignored[i] || p.contacts[i].type != ContactType::kFrictional) continue;
+    const int off = ctx.offsets[i];
+    const double normal = lambda[off];
+    if (!(normal > 0.0)) continue;
+    load += normal;
+    if (ctx.mu[i] > 0.0 && !(std::hypot(lambda[off + 1], lambda[off + 2]) < kAutoStickInside * ctx.mu[i] * normal))
+      sliding += normal;
+  }
+  return load > 0.0 ? sliding / load : 1.0;
+}
+
 // One dense factorization of a symmetric LCP's rows, in sweeps (kAutoProbeLcpFactorSweeps).
 int lcpFactorSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 6; }
 
@@ -329,11 +355,21 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // and the probe's sweeps are only insurance against a problem that a few of them solve; those
 // that go on to the tolerance cost more than the scout they replace, and those that stop short
 // are lost, the scout starting from the start (the scenes' brick pyramids B2 and B3 at
-// 1e-4..1e-8: 0.7-0.8x auto's time). Not at three digits, where no scout runs: stacks of boxes
-// with such contacts are solved there by the sweeps that the probe's rate puts first, or by
-// newton, in a seventh to a fifteenth of apgd's iterations (test_portfolio.cpp).
-int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction, bool apgd_holds) {
-  if (scout && apgd_holds) return kAutoProbeSweeps;
+// 1e-4..1e-8: 0.7-0.8x auto's time). At three digits, where apgd goes first and no scout
+// runs, ten only where at most kAutoSlidingLoad of the load slides at the probe's iterate
+// (slidingLoadShare). apgd solves Coulomb's law as a sequence of convex problems, one per
+// shift μ |u_t| on each normal row, each update restarting its momentum (apgd.cpp); a sticking
+// contact's shift is 0 and stays 0, so where the load sticks one convex problem is most of the
+// solve and the momentum carries it: brick pyramids at rest (B3: 30 iterations against nlgs's
+// 47 sweeps, which the probe had swept; BoxesStack1: 95 against 226). Where it slides, every
+// shift moves: stacks of boxes pushed sideways, all of their load sliding, are solved by the
+// sweeps that the probe's rate puts first, or by newton, in a seventh to a fifteenth of
+// apgd's iterations (test_portfolio.cpp), and there the allowance stays at fifty.
+int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction, bool apgd_holds,
+                   const Eigen::VectorXd& lambda) {
+  if (apgd_holds && (scout || (ctx.params->tolerance < kAutoTwoDigits &&
+                               slidingLoadShare(ctx, lambda) <= kAutoSlidingLoad)))
+    return kAutoProbeSweeps;
   switch (plan.front()) {
     case SolverKind::kNewton: {
       // With friction, where newton's warm-up runs to the tolerance itself (a loose one), at
@@ -1535,7 +1571,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         int allowance = kAutoProbeSweeps;
         if (probe_sweeps + 2.0 * needed > allowance) {
           const Plan& plan_now = planned();  // sets plan_scout: measured before it is read
-          allowance = probeAllowance(plan_now, plan_scout, ctx, friction, plan_apgd_holds);
+          allowance = probeAllowance(plan_now, plan_scout, ctx, friction, plan_apgd_holds, best);
         }
         if (probe_sweeps + 2.0 * needed <= allowance) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
