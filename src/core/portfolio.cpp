@@ -51,7 +51,8 @@ using Clock = std::chrono::steady_clock;
 // the tolerance, with a margin of 2, within
 // ten sweeps or, once the plan is measured, within a lower bound of its first member's cost
 // (probeAllowance; ten again before a scout on faces resting on faces, and before apgd at
-// three digits where most of their load sticks). A few weakly coupled
+// three digits where most of their load sticks; where it slides, apgd goes behind
+// Gauss-Seidel after the probe). A few weakly coupled
 // contacts with exact local solves end there, at a fraction of a Newton step's cost.
 // Otherwise a Gauss-Seidel plan goes on from the probe's iterate, newton too if the probe was
 // no longer than its own warm-up, and any other plan starts from the start, as it would have
@@ -364,7 +365,8 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // 47 sweeps, which the probe had swept; BoxesStack1: 95 against 226). Where it slides, every
 // shift moves: stacks of boxes pushed sideways, all of their load sliding, are solved by the
 // sweeps that the probe's rate puts first, or by newton, in a seventh to a fifteenth of
-// apgd's iterations (test_portfolio.cpp), and there the allowance stays at fifty.
+// apgd's iterations (test_portfolio.cpp): there the allowance stays at fifty, and after the
+// probe apgd goes behind Gauss-Seidel (runPortfolio, the probe's end).
 int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction, bool apgd_holds,
                    const Eigen::VectorXd& lambda) {
   if (apgd_holds && (scout || (ctx.params->tolerance < kAutoTwoDigits &&
@@ -1075,6 +1077,14 @@ bool moveFirst(std::vector<PortfolioMember>& members, SolverKind kind) {
   return true;
 }
 
+// Moves the member `kind` to just before `before` where it comes after it (scouts aside).
+void putBefore(std::vector<PortfolioMember>& members, SolverKind kind, SolverKind before) {
+  auto is = [](SolverKind k) { return [k](const PortfolioMember& mem) { return mem.kind == k && !mem.scout; }; };
+  const auto target = std::find_if(members.begin(), members.end(), is(before));
+  const auto it = std::find_if(members.begin(), members.end(), is(kind));
+  if (target < it && it != members.end()) std::rotate(target, it, it + 1);
+}
+
 // Puts newton first in a plan, with a first slice of its warm-up and as many steps as
 // `sweeps` pay for (newtonStepSweeps each), at least kAutoNewtonSteps.
 void newtonFirst(std::vector<PortfolioMember>& members, const SolveContext& ctx, double sweeps) {
@@ -1702,6 +1712,16 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           newtonCheaperThanSweeps(ctx, probe_sweeps + needed) &&
           !newtonCheaperThanSweeps(ctx, (probe_sweeps + needed) / 2))
         newtonFirst(members, ctx, probe_sweeps + needed);
+      // The converse of probeAllowance's test: where more than kAutoSlidingLoad of the load
+      // slides at the probe's iterate, an apgd planned because it holds (faces resting on faces)
+      // goes behind Gauss-Seidel, whose sweeps go on from that iterate: every shift μ |u_t| of
+      // a sliding contact moves, and each update restarts apgd's momentum. Stacks of eight boxes
+      // pushed sideways at 1e-3, all their load sliding: 178 sweeps where the path through apgd
+      // took 852 iterations (nlgs alone 180, apgd 849); with four points per face, behind
+      // newton (newtonFirst), 219 where newton's stall had handed over to apgd, 728.
+      if (plan_apgd_holds && !plan_scout && params.tolerance < kAutoTwoDigits &&
+          slidingLoadShare(ctx, best) > kAutoSlidingLoad)
+        putBefore(members, probe_kind, SolverKind::kApgd);
       // The plan's first member (the scout starts from the start anyway).
       const SolverKind first = members.front().scout ? planned().front() : members.front().kind;
       const bool warmup = probe_kind == SolverKind::kNlgs;  // newton's warm-up sweeps are nlgs's
