@@ -134,13 +134,13 @@ constexpr int kAutoScoutRows = 30;
 // more; dropped at the cap, newton took 3.7 ms where apgd alone takes 1.4. The cost bound alone,
 // without the horizon, lost 2-3x on BoxesStack1 at 1e-5/1e-6, whose early rate promises what
 // apgd does not keep (20-40 iterations forecasting 140-200).
-constexpr int kAutoScoutNewtonSteps = 8;
+constexpr int kAutoScoutNewtonSteps = 8;  // the low end of newton's 8-20 steps on such contacts
 // A contact sticks where its tangential force is inside this fraction of μ λ_n
 // (slidingLoadShare), and the load is taken to stick (probeAllowance) where at most
 // kAutoSlidingLoad of it slides: between what the probe's iterate showed after three
 // sweeps on brick pyramids at rest (0.28-0.55 sliding) and on stacks pushed sideways (1.0).
 constexpr double kAutoStickInside = 0.99;
-constexpr double kAutoSlidingLoad = 0.75;  // the low end of newton's 8-20 steps on such contacts
+constexpr double kAutoSlidingLoad = 0.75;
 // Gauss-Seidel's over-relaxation ω, chosen online where the user left sor at 1: a plan's
 // Gauss-Seidel member first sweeps kAutoOmegaTrial times plainly, measuring its rate ρ per
 // sweep, then, if at that rate it would need more sweeps than that again, as many at Young's
