@@ -332,6 +332,11 @@ double slidingLoadShare(const SolveContext& ctx, const Eigen::VectorXd& lambda) 
   return load > 0.0 ? sliding / load : 1.0;
 }
 
+// At most kAutoSlidingLoad of the load slides at `lambda` (probeAllowance, the probe's end).
+bool loadSticks(const SolveContext& ctx, const Eigen::VectorXd& lambda) {
+  return slidingLoadShare(ctx, lambda) <= kAutoSlidingLoad;
+}
+
 // One dense factorization of a symmetric LCP's rows, in sweeps (kAutoProbeLcpFactorSweeps).
 int lcpFactorSweeps(const SolveContext& ctx) { return ctx.problem->rowCount() / 6; }
 
@@ -369,8 +374,7 @@ bool probesSymmetricLcp(const SolveContext& ctx) {
 // probe apgd goes behind Gauss-Seidel (runPortfolio, the probe's end).
 int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool friction, bool apgd_holds,
                    const Eigen::VectorXd& lambda) {
-  if (apgd_holds && (scout || (ctx.params->tolerance < kAutoTwoDigits &&
-                               slidingLoadShare(ctx, lambda) <= kAutoSlidingLoad)))
+  if (apgd_holds && (scout || (ctx.params->tolerance < kAutoTwoDigits && loadSticks(ctx, lambda))))
     return kAutoProbeSweeps;
   switch (plan.front()) {
     case SolverKind::kNewton: {
@@ -1719,8 +1723,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
       // pushed sideways at 1e-3, all their load sliding: 178 sweeps where the path through apgd
       // took 852 iterations (nlgs alone 180, apgd 849); with four points per face, behind
       // newton (newtonFirst), 219 where newton's stall had handed over to apgd, 728.
-      if (plan_apgd_holds && !plan_scout && params.tolerance < kAutoTwoDigits &&
-          slidingLoadShare(ctx, best) > kAutoSlidingLoad)
+      if (plan_apgd_holds && !plan_scout && params.tolerance < kAutoTwoDigits && !loadSticks(ctx, best))
         putBefore(members, probe_kind, SolverKind::kApgd);
       // The plan's first member (the scout starts from the start anyway).
       const SolverKind first = members.front().scout ? planned().front() : members.front().kind;
