@@ -3,6 +3,9 @@
 // and the per-solve time budget.
 #include "solvers_test_util.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include <thread>
 
 namespace lcp_contact_solver::core {
@@ -249,6 +252,45 @@ TEST(Newton, StepsSolveTheLinearisationOnSmallAndLargeSystems) {
     EXPECT_EQ(r.status, SolveStatus::kConverged) << r.message;
     EXPECT_LE(r.residual, 1e-12);
     expectFinite(r);
+  }
+}
+
+// newton's active-set paths factor W_AA by choleskyInPlace: the column form up to
+// kColumnCholeskyRows rows, Eigen's blocked LLᵀ above. On either side of that size L Lᵀ gives
+// back the matrix (the upper half untouched), and a matrix that is not positive definite (one
+// eigenvalue pushed below zero; a zero row) is refused by both forms, as Eigen's LLT refuses it.
+TEST(Cholesky, BothFormsFactorWhatEigensLltFactorsAndRefuseWhatItRefuses) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  for (int n : {1, 2, 7, 52, kColumnCholeskyRows, kColumnCholeskyRows + 1, 150}) {
+    SCOPED_TRACE(n);
+    Eigen::MatrixXd J(n, n);
+    for (int i = 0; i < J.size(); ++i) J.data()[i] = g(rng);
+    const Eigen::MatrixXd W = J * J.transpose() / n + 1e-3 * Eigen::MatrixXd::Identity(n, n);
+    for (bool column_form : {false, true}) {
+      Eigen::MatrixXd A = W;
+      A.triangularView<Eigen::StrictlyUpper>().setConstant(7.0);  // not read, not written
+      ASSERT_TRUE(column_form ? columnCholeskyInPlace(A) : choleskyInPlace(A));
+      const Eigen::MatrixXd L = A.triangularView<Eigen::Lower>();
+      EXPECT_LE((L * L.transpose() - W).norm(), 1e-12 * W.norm());
+      EXPECT_TRUE((A.triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() ==
+                   Eigen::MatrixXd(Eigen::MatrixXd::Constant(n, n, 7.0).triangularView<Eigen::StrictlyUpper>()).array())
+                      .all());
+    }
+    if (n < 2) continue;
+    // Indefinite: W minus twice its smallest eigenvalue's share along that eigenvector.
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(W);
+    const Eigen::VectorXd v = eig.eigenvectors().col(0);
+    const Eigen::MatrixXd indefinite = W - (eig.eigenvalues()[0] + 1e-2) * 2.0 * v * v.transpose();
+    Eigen::MatrixXd singular = W;
+    singular.row(n / 2).setZero();
+    singular.col(n / 2).setZero();
+    for (const Eigen::MatrixXd* bad : std::initializer_list<const Eigen::MatrixXd*>{&indefinite, &singular}) {
+      ASSERT_NE(Eigen::LLT<Eigen::MatrixXd>(*bad).info(), Eigen::Success);
+      Eigen::MatrixXd A = *bad, B = *bad;
+      EXPECT_FALSE(choleskyInPlace(A));
+      EXPECT_FALSE(columnCholeskyInPlace(B));
+    }
   }
 }
 

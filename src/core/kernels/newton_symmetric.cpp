@@ -30,8 +30,9 @@
 // rigid stack, no diagonal shift) have many force solutions, and the cone test of the one a
 // pivoted LDLᵀ picks says nothing about the others.
 //
-// Factorisation: small or dense W: W_AA gathered into a dense matrix (Eigen's blocked LLᵀ,
-// several times faster than its unblocked LDLᵀ at a few hundred rows). A W_AA that is only
+// Factorisation: small or dense W: W_AA gathered into a dense matrix, LLᵀ (choleskyInPlace:
+// column by column up to 120 rows, Eigen's blocked form above, several times faster than its
+// unblocked LDLᵀ at a few hundred rows). A W_AA that is only
 // semidefinite (redundant rows, no diagonal shift) gets a pivoted LDLᵀ whose zero pivots
 // are dropped: one of the many solutions when W_AA λ_A = -q_A is consistent, which the
 // residual then confirms. From the second step on, the set usually differs from the last one
@@ -163,10 +164,9 @@ class DenseReduced : public ReducedSystem {
     const Eigen::Map<const Eigen::MatrixXd> W(s_.W.data(), n_, n_);
     for (int c = 0; c < m_; ++c)
       for (int r = c; r < m_; ++r) M(r, c) = W(s_.index[r], s_.index[c]);  // LLT reads the lower half
-    // In place (Eigen's blocked LLᵀ; fails unless W_AA > 0): L overwrites M's lower half.
+    // In place (fails unless W_AA > 0): L overwrites M's lower half.
     semidefinite_ = false;
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(M);
-    if (llt.info() == Eigen::Success) return factored_ = true;
+    if (choleskyInPlace(M)) return factored_ = true;
     return semidefinite && factorizeSemidefinite();
   }
   void solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) override {
@@ -292,8 +292,7 @@ class DenseReduced : public ReducedSystem {
         for (int b = a; b < e; ++b) T(q + b, q + a) = W(s_.added[b], s_.added[a]);
       auto TEE = T.block(q, q, e, e);
       if (q > 0) TEE.selfadjointView<Eigen::Lower>().rankUpdate(TEK, -1.0);
-      Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(TEE);
-      if (llt.info() != Eigen::Success) return false;
+      if (!choleskyInPlace(TEE)) return false;
     }
     if (!T.diagonal().allFinite()) return false;
     // The new order: the kept rows as they were, then the new ones.
@@ -530,6 +529,30 @@ bool activeSetNewton(const SolveContext& ctx, bool stick, int max_steps, int den
 }
 
 }  // namespace
+
+// Column by column (Cholesky-Crout): L_kk = √(a_kk − ‖L_k,0:k‖²), then the column
+// below it, (a_k+1:n,k − L_k+1:n,0:k L_k,0:kᵀ) / L_kk, one matrix-vector product per column.
+// Eigen's blocked LLᵀ pays a packing step per panel that only pays back on larger matrices:
+// bench/cholesky_forms.cpp (docs/BENCHMARKS.md) measures the crossover.
+bool columnCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> a) {
+  const Eigen::Index n = a.rows();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double pivot = a(k, k) - a.row(k).head(k).squaredNorm();
+    if (!(pivot > 0.0)) return false;
+    const double diagonal = std::sqrt(pivot);
+    a(k, k) = diagonal;
+    const Eigen::Index below = n - k - 1;
+    if (below == 0) break;
+    if (k > 0) a.col(k).tail(below).noalias() -= a.bottomLeftCorner(below, k) * a.row(k).head(k).transpose();
+    a.col(k).tail(below) /= diagonal;
+  }
+  return true;
+}
+
+bool choleskyInPlace(Eigen::Ref<Eigen::MatrixXd> a) {
+  if (a.rows() <= kColumnCholeskyRows) return columnCholeskyInPlace(a);
+  return Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower>(a).info() == Eigen::Success;
+}
 
 bool symmetricLcp(const SolveContext& ctx) {
   std::vector<Role> roles;

@@ -150,4 +150,13 @@ KernelReport runProxNewton(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runPyramidLemke(const SolveContext& ctx, Eigen::VectorXd& lambda);
 KernelReport runBoxedGaussSeidel(const SolveContext& ctx, Eigen::VectorXd& lambda);
 
+// In-place Cholesky of the lower half of `a` (L overwrites it; the upper half is not read):
+// false where a pivot is not positive. newton's active-set paths factor W_AA with it
+// (newton_symmetric.cpp): column by column up to kColumnCholeskyRows rows, Eigen's blocked
+// LLᵀ above, whichever is faster at that size.
+constexpr int kColumnCholeskyRows = 120;
+bool choleskyInPlace(Eigen::Ref<Eigen::MatrixXd> a);
+// The column-by-column form alone, at any size (bench/cholesky_forms.cpp times both).
+bool columnCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> a);
+
 }  // namespace lcp_contact_solver::core
