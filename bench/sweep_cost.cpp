@@ -3,13 +3,13 @@
 // sweep and the Cholesky are the two figures auto's cost tests weigh against each other
 // (portfolio.cpp: stickingCostSweeps counts a factorization in sweeps by flops, n³/3 against
 // 2 × W's stored entries). A sweep is timed as the difference of two nlgs solves run to a fixed
-// number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is Eigen's LLT of
-// W + I gathered dense, as the sticking path factors it. Each is the fastest of its repeats.
+// number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is choleskyInPlace of
+// W + I gathered dense, as the sticking path factors it (Eigen's LLT before 2026-12-08). Each is the fastest of its repeats.
 #include "work_precision.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"
+#include "lcp_contact_solver/core/kernels/kernels.h"
 
-#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <limits>
@@ -80,7 +80,7 @@ void writeSweepCosts(const std::vector<BenchProblem>& problems, std::ostream& cs
     const double cholesky = fastest(
         [&] {
           A = M;
-          Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(A);
+          lcs::core::choleskyInPlace(A);
         },
         5, 0.05);
     const double flop_model = double(n) * n * n / 3.0 / (2.0 * std::max(1.0, stored));
