@@ -3,13 +3,13 @@
 // sweep and the Cholesky are the two figures auto's cost tests weigh against each other
 // (portfolio.cpp: stickingCostSweeps counts a factorization in sweeps by flops, n³/3 against
 // 2 × W's stored entries). A sweep is timed as the difference of two nlgs solves run to a fixed
-// number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is choleskyInPlace of
-// W + I gathered dense, as the sticking path factors it (Eigen's LLT before 2026-12-08). Each is the fastest of its repeats.
+// number of sweeps (a tolerance never met), so that nlgs's set-up cancels; the Cholesky is
+// choleskyInPlace of W + I gathered dense, as the sticking path factors it (Eigen's LLT before
+// 2026-12-08). Each is the fastest of its repeats.
 #include "work_precision.h"
 
 #include "lcp_contact_solver/core/contact_solver.h"
 #include "lcp_contact_solver/core/kernels/kernels.h"
-
 
 #include <algorithm>
 #include <limits>
