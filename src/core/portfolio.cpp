@@ -296,6 +296,12 @@ bool omegaWindowsWithinWarmup(int probe_sweeps, double stage_rate) {
   return probe_sweeps + kAutoOmegaTrial <= kNewtonWarmupSweeps && stage_rate >= kAutoOmegaSlowRate;
 }
 
+// Whether a plan's first member starts from the start rather than from the probe's iterate:
+// the probe's sweeps are then lost (Gauss-Seidel and newton go on from them, newton's warm-up).
+bool startsFromTheStart(SolverKind first) {
+  return !(first == SolverKind::kNlgs || first == SolverKind::kPgs || first == SolverKind::kNewton);
+}
+
 // auto's order of members: at most four, kept inline (no allocation on a microsecond solve).
 class Plan {
  public:
@@ -397,6 +403,46 @@ int probeAllowance(const Plan& plan, bool scout, const SolveContext& ctx, bool f
 double iterationsToReach(double tolerance, double from, double to, int iterations) {
   const double per_iteration = std::pow(to / from, 1.0 / iterations);
   return std::log(tolerance / to) / std::log(per_iteration);
+}
+
+// The further sweeps a probe stage forecasts from how its rate slowed within it. A residual
+// made of many modes decaying at different rates falls like a power of the sweep count until
+// the slowest mode is left, not geometrically: its log-rate per sweep g(k) decays as k^-a
+// (a = 0 geometric, a = 1 a power law r ∝ k^-p). The stage's two halves measure g at two sweep
+// counts, hence a, and the forecast integrates g from the stage's end to the tolerance,
+// ∫ g2 (k/k2)^-a dk = ln(r/tol). Where a is near 0 this is the stage's geometric forecast, which
+// the probe doubles anyway; it binds only where the stage slowed faster than that margin
+// allows for. BoxesStack1 at 1e-2: sweeps 3-6 fell 0.81 per sweep and 6-10 0.90 (a = 1.16),
+// 132 more forecast where the stage's mean rate said 12 (plain nlgs takes 86 in all); LMGC's
+// box of grains, sweeps 3-14: 6.1 where the mean rate said 5.5 (it ends at 23).
+// The model is pessimistic: the slowest mode's geometric rate takes over later, and the halves
+// of a stage on MuJoCo's soft bodies swing (a from -1.5 to 2.5 on a cloth's successive stages).
+// So it binds only before a member that starts from the start (startsFromTheStart), where the
+// probe's sweeps past what it forecasts are pure loss; before Gauss-Seidel or newton they are
+// kept, and stopping them early cost up to 3x (the held-out softbox's elliptic steps at
+// 1e-7..1e-10: nlgs's 177-264 sweeps where newton then took 34 slow iterations).
+// `history`: the residual after each of the stage's sweeps, `from` its start's, `before` the
+// sweeps before it (the first stage, from the start, falls fast in any case: not measured).
+// NaN where the halves do not both fall, infinity where the slowing never reaches the tolerance.
+double slowingSweepsToReach(double tolerance, double from, const std::vector<double>& history, int before) {
+  const int n = static_cast<int>(history.size());
+  if (n < 4 || before <= 0) return std::numeric_limits<double>::quiet_NaN();
+  const int h = n / 2;
+  const double mid = history[h - 1];
+  const double end = history[n - 1];
+  if (!(mid < from && end < mid && end > tolerance)) return std::numeric_limits<double>::quiet_NaN();
+  const double g1 = std::log(from / mid) / h;
+  const double g2 = std::log(mid / end) / (n - h);
+  const double k1 = before + 0.5 * h;
+  const double k2 = before + h + 0.5 * (n - h);
+  const double a = std::log(g1 / g2) / std::log(k2 / k1);
+  const double k_end = before + n;
+  const double left = std::log(end / tolerance);
+  const double c = g2 * std::pow(k2, a);
+  if (std::abs(a - 1.0) < 1e-9) return k_end * std::expm1(left / c);
+  const double t = std::pow(k_end, 1.0 - a) + left * (1.0 - a) / c;
+  if (!(t > 0.0)) return std::numeric_limits<double>::infinity();
+  return std::pow(t, 1.0 / (1.0 - a)) - k_end;
 }
 
 // After a Gauss-Seidel run (the probe's first stage, and any later stage, trial window or
@@ -1377,6 +1423,10 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     // kNewtonWarmupSweeps) a stage stops at, so that its iterate can be kept for newton.
     const bool warmup_stage = cur.probe && probe_kind == SolverKind::kNlgs && !warmup_over;
     member_params.tolerance = params.tolerance;
+    // The probe's stages after its first record the residual of each sweep (which the kernel
+    // computes anyway under the residual rule) for slowingSweepsToReach; the report carries
+    // such histories only where the user asked for them.
+    member_params.displayDebug = params.displayDebug || (cur.probe && probe_sweeps > 0);
     if (warmup_stage) {
       member_params.maxIt = std::min(member_params.maxIt, kNewtonWarmupSweeps - probe_sweeps);
       member_params.tolerance = std::max(params.tolerance, kNewtonWarmupTolerance);
@@ -1388,6 +1438,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     member.warmup_start_was_warm = cur.warmup_credit > 0 && !origin.isZero(0.0);
     cur.warmup_credit = 0;
     KernelReport r = runKernel(cur.kind, member, x);  // not const: a failed member's message is moved
+    member_params.displayDebug = params.displayDebug;
     const bool sticking_before = sticking_tried;  // that path, when it runs below, overwrites x
     if (cur.scout) scout.x = x;
     // A kernel that let a force through on an ignored contact measured the rest against it
@@ -1403,7 +1454,7 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (stages->empty() || stages->back().first != solverName(cur.kind))
       stages->emplace_back(solverName(cur.kind), 0.0);
     stages->back().second += seconds;
-    if (!r.history.empty()) report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    if (params.displayDebug && !r.history.empty()) report.history.insert(report.history.end(), r.history.begin(), r.history.end());
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
@@ -1587,7 +1638,12 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
           const Plan& plan_now = planned();  // sets plan_scout: measured before it is read
           allowance = probeAllowance(plan_now, plan_scout, ctx, friction, plan_apgd_holds, best);
         }
-        if (probe_sweeps + 2.0 * needed <= allowance) {
+        // And, where the plan's first member would lose the probe's sweeps (it starts from the
+        // start), no fewer than the stage's own slowing forecasts (slowingSweepsToReach).
+        const double slowing =
+            slowingSweepsToReach(params.tolerance, stage_start, r.history, probe_sweeps - r.iterations);
+        const bool slowing_binds = probe_sweeps + slowing > allowance && startsFromTheStart(planned().front());
+        if (probe_sweeps + 2.0 * needed <= allowance && !slowing_binds) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
           // Over-relaxation's trial (kAutoOmegaTrial), where the plain sweeps would outlast it:
           // plain_rate that of the stage just run (not the first: its sweeps from the start

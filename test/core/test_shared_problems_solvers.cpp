@@ -153,6 +153,21 @@ TEST(SharedProblemsSolvers, GaussSeidelWhoseForecastOutgrowsItsSliceHandsBackToA
   EXPECT_LT(10 * r.iterations, 6 * nlgs.iterations) << r.solver << " against nlgs's " << nlgs.iterations;
 }
 
+// A probe stage whose rate slowed within it forecasts from that slowing (portfolio.cpp,
+// slowingSweepsToReach): BoxesStack1 at 1e-2, whose sweeps 3-10 slowed from 0.81 to 0.90 per
+// sweep, stops after them and apgd runs from the start as planned, where the stage's mean rate
+// had let it sweep on to 20 (plain nlgs takes 86). LMGC's box of grains at 1e-2 falls
+// geometrically and its probe still sweeps to the tolerance, as many sweeps as nlgs alone.
+// Independently: the residual recomputed from the forces (referenceAndAuto).
+TEST(SharedProblemsSolvers, AProbeStageWhoseRateSlowedStopsBeforeAPlannedApgd) {
+  const auto [apgd, stack] = referenceAndAuto("BoxesStack1-i100000-32.hdf5.dat", 1e-2, SolverKind::kApgd);
+  EXPECT_EQ(stack.solver, "auto:nlgs->apgd");
+  EXPECT_LE(stack.iterations, apgd.iterations + 10) << "at most ten probe sweeps before apgd";
+  const auto [nlgs, grains] = referenceAndAuto("LMGC_100_PR_PerioBox-i00361-60-03000.hdf5", 1e-2, SolverKind::kNlgs);
+  EXPECT_EQ(grains.solver, "auto:nlgs");
+  EXPECT_EQ(grains.iterations, nlgs.iterations);
+}
+
 // On the scout's plans at a tight tolerance the probe's windows at Young's ω run as newton's
 // warm-up (portfolio.cpp, omegaWindowsWithinWarmup), where plain sweeps from the start already
 // fall slower than 0.95 per sweep: OneObject-i1028 at 1e-4 (0.979), whose second window

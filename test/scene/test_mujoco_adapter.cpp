@@ -401,6 +401,28 @@ TEST(MujocoCrossCheck, AutoWeighsTheStickingPathAgainWhereTheSweepsSlow) {
   }
 }
 
+// A probe stage's slowing stops the probe only before a member that starts from the start
+// (portfolio.cpp, slowingSweepsToReach). MuJoCo's softbox (elliptic, step 300, 735 rows) at
+// 1e-7: the probe's sweeps 20-30 slowed from 0.90 to 0.97 per sweep, a slowing that never
+// reaches the tolerance on its model, yet plain sweeps reach it in about 175. Its plan is
+// newton, which goes on from the probe's sweeps: the probe sweeps on to the tolerance, where
+// stopping it handed over to newton's 34 iterations at 3x the time. Independently: as many
+// sweeps as nlgs alone (give or take its over-relaxation trial), and the residual recomputed
+// from the forces.
+TEST(MujocoCrossCheck, AutoSweepsOnBeforeNewtonWhereTheProbesRateSlows) {
+  if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
+  MujocoProblem mp;
+  ASSERT_NO_FATAL_FAILURE(ellipticAt(kSoftbox, 300, &mp));
+  const double tolerance = 1e-7;
+  const core::SolveResult nlgs = core::solveProblem(mp.problem, params(core::SolverKind::kNlgs, tolerance, 100000));
+  ASSERT_TRUE(nlgs.converged) << nlgs.message;
+  const core::SolveResult r = core::solveProblem(mp.problem, params(core::SolverKind::kAuto, tolerance, 100000));
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_EQ(r.solver, "auto:nlgs");
+  EXPECT_LE(r.iterations, nlgs.iterations + 10) << "plain nlgs: " << nlgs.iterations << " sweeps";
+  EXPECT_LE(problemResidual(mp, r.forces), tolerance);
+}
+
 // MuJoCo's rope (elliptic, step 300: 4 contacts, 12 rows) at 1e-3: the probe's plain rate
 // forecasts more sweeps than newton's model (its warm-up and two steps), one window at Young's
 // ω meets the tolerance. Before, auto went `nlgs->newton` (21 iterations) where nlgs at
