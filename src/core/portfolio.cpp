@@ -1454,7 +1454,8 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
     if (stages->empty() || stages->back().first != solverName(cur.kind))
       stages->emplace_back(solverName(cur.kind), 0.0);
     stages->back().second += seconds;
-    if (params.displayDebug && !r.history.empty()) report.history.insert(report.history.end(), r.history.begin(), r.history.end());
+    if (params.displayDebug && !r.history.empty())
+      report.history.insert(report.history.end(), r.history.begin(), r.history.end());
     used += r.iterations;
     const double start_residual = best_residual;
     // With the residual rule every kernel's solver_error is the residual of what it returned
@@ -1640,10 +1641,13 @@ KernelReport runPortfolio(const SolveContext& ctx, Eigen::VectorXd& lambda) {
         }
         // And, where the plan's first member would lose the probe's sweeps (it starts from the
         // start), no fewer than the stage's own slowing forecasts (slowingSweepsToReach).
-        const double slowing =
-            slowingSweepsToReach(params.tolerance, stage_start, r.history, probe_sweeps - r.iterations);
-        const bool slowing_binds = probe_sweeps + slowing > allowance && startsFromTheStart(planned().front());
-        if (probe_sweeps + 2.0 * needed <= allowance && !slowing_binds) {
+        const bool goes_on =
+            probe_sweeps + 2.0 * needed <= allowance &&
+            !(probe_sweeps + slowingSweepsToReach(params.tolerance, stage_start, r.history,
+                                                  probe_sweeps - r.iterations) >
+                  allowance &&
+              startsFromTheStart(planned().front()));
+        if (goes_on) {
           cur.slice = std::min(static_cast<int>(std::ceil(needed)) + 1, allowance - probe_sweeps);
           // Over-relaxation's trial (kAutoOmegaTrial), where the plain sweeps would outlast it:
           // plain_rate that of the stage just run (not the first: its sweeps from the start
