@@ -401,14 +401,6 @@ TEST(MujocoCrossCheck, AutoWeighsTheStickingPathAgainWhereTheSweepsSlow) {
   }
 }
 
-// A probe stage's slowing stops the probe only before a member that starts from the start
-// (portfolio.cpp, slowingSweepsToReach). MuJoCo's softbox (elliptic, step 300, 735 rows) at
-// 1e-7: the probe's sweeps 20-30 slowed from 0.90 to 0.97 per sweep, a slowing that never
-// reaches the tolerance on its model, yet plain sweeps reach it in about 175. Its plan is
-// newton, which goes on from the probe's sweeps: the probe sweeps on to the tolerance, where
-// stopping it handed over to newton's 34 iterations at 3x the time. Independently: as many
-// sweeps as nlgs alone (give or take its over-relaxation trial), and the residual recomputed
-// from the forces.
 // `model`'s elliptic step `step` solved by nlgs and by auto at `tolerance`: both converge, auto
 // ends as `auto:nlgs` and its forces meet the tolerance when the residual is recomputed from
 // them; *nlgs_sweeps and *auto_sweeps get the sweeps each took.
@@ -426,6 +418,14 @@ void expectAutoEndsByGaussSeidel(const std::string& model, int step, double tole
   *auto_sweeps = r.iterations;
 }
 
+// A probe stage's slowing stops the probe only before a member that starts from the start
+// (portfolio.cpp, slowingSweepsToReach). MuJoCo's softbox (elliptic, step 300, 735 rows) at
+// 1e-7: the probe's sweeps 20-30 slowed from 0.90 to 0.97 per sweep, a slowing that never
+// reaches the tolerance on its model, yet plain sweeps reach it in about 175. Its plan is
+// newton, which goes on from the probe's sweeps: the probe sweeps on to the tolerance, where
+// stopping it handed over to newton's 34 iterations at 3x the time. Independently: as many
+// sweeps as nlgs alone (give or take its over-relaxation trial), and the residual recomputed
+// from the forces.
 TEST(MujocoCrossCheck, AutoSweepsOnBeforeNewtonWhereTheProbesRateSlows) {
   if (!haveModel(kSoftbox)) GTEST_SKIP() << kSoftbox << " missing (libmujoco-samples)";
   int nlgs = 0;
